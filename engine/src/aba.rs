@@ -1,0 +1,101 @@
+//! Articulated-body algorithm: forward dynamics `q̈ = M⁻¹ (τ + Jᵀ f_ext − C v − g)`
+//! in O(n) (Featherstone 2008, §7.3, Table 7.1, in the fixed-frame form where
+//! articulated inertias add without transforms; floating base per §9.2).
+
+use crate::data::Data;
+use crate::kinematics::forward_kinematics;
+use crate::model::{JointType, Model};
+use crate::spatial::{Force, Motion};
+use glam::DVec3;
+
+/// Forward dynamics without external forces. Fills and returns `data.ddq` (nv).
+/// For a floating base, `ddq[0..6]` is the base's spatial acceleration in the
+/// base frame (Pinocchio's convention) and `tau[0..6]` a wrench applied to the
+/// base (base frame). Returns an all-NaN result if the base inertia is singular.
+pub fn aba<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64], tau: &[f64]) -> &'d [f64] {
+    forward_kinematics(model, data, q, v);
+    aba_from_kinematics(model, data, v, tau, false);
+    &data.ddq
+}
+
+/// ABA after [`forward_kinematics`] on the same `(q, v)`. With `use_external`,
+/// the forces in `data.f_ext` (world axes, about `data.origin`) act on the bodies.
+pub fn aba_from_kinematics(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    tau: &[f64],
+    use_external: bool,
+) {
+    // Pass 1: bias forces and velocity-product accelerations.
+    for i in 0..model.nbodies {
+        let inertia = data.inertia_ref[i];
+        let vi = data.vel[i];
+        data.ia[i] = inertia.to_sym6();
+        let mut p = vi.cross_force(inertia.mul_motion(vi));
+        if use_external {
+            p -= data.f_ext[i];
+        }
+        data.pa[i] = p;
+        if i > 0 {
+            data.c[i] = vi.cross(data.s[i] * v[model.idx_v[i]]);
+        }
+    }
+    // Pass 2: articulated inertias, leaves to root.
+    for i in (1..model.nbodies).rev() {
+        let iv = model.idx_v[i];
+        let s = data.s[i];
+        let ia = data.ia[i];
+        let u = ia.mul_motion(s);
+        let d = s.dot(u) + model.armature[iv];
+        let d_inv = 1.0 / d;
+        let ut = tau[iv] - s.dot(data.pa[i]);
+        data.u[i] = u;
+        data.d_inv[i] = d_inv;
+        data.u_tau[i] = ut;
+        let mut ia_a = ia;
+        ia_a.sub_outer(u, d_inv);
+        let pa = data.pa[i] + ia_a.mul_motion(data.c[i]) + u * (ut * d_inv);
+        let p = model.parent[i];
+        data.ia[p] += ia_a;
+        data.pa[p] += pa;
+    }
+    // Pass 3: accelerations, root to leaves. Gravity is a fictitious upward
+    // acceleration of the base; true accelerations are a' + a_grav.
+    let a_grav = Motion::new(model.gravity, DVec3::ZERO);
+    let a0 = match model.joint_type[0] {
+        JointType::Free => {
+            let r = data.pose[0].rot;
+            let applied = Force::new(
+                r * DVec3::new(tau[0], tau[1], tau[2]),
+                r * DVec3::new(tau[3], tau[4], tau[5]),
+            );
+            let rhs = applied - data.pa[0];
+            match data.ia[0].solve(rhs) {
+                Some(a) => a,
+                None => Motion::new(DVec3::NAN, DVec3::NAN),
+            }
+        }
+        _ => -a_grav,
+    };
+    data.acc[0] = a0;
+    for i in 1..model.nbodies {
+        let iv = model.idx_v[i];
+        let a = data.acc[model.parent[i]] + data.c[i];
+        let qdd =
+            (data.u_tau[i] - data.u[i].lin.dot(a.lin) - data.u[i].ang.dot(a.ang)) * data.d_inv[i];
+        data.ddq[iv] = qdd;
+        data.acc[i] = a + data.s[i] * qdd;
+    }
+    if model.joint_type[0] == JointType::Free {
+        let rt = data.pose[0].rot.transpose();
+        let a0_true = a0 + a_grav;
+        let al = rt * a0_true.lin;
+        let aa = rt * a0_true.ang;
+        data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
+    }
+    // Leave `acc` as true spatial accelerations for callers.
+    for i in 0..model.nbodies {
+        data.acc[i] += a_grav;
+    }
+}

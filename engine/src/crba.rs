@@ -1,0 +1,63 @@
+//! Composite-rigid-body algorithm: the joint-space mass matrix `M(q)`
+//! (Featherstone 2008, §6.2, Table 6.2, in the fixed frame, where composite
+//! inertias add without transforms).
+
+use crate::data::Data;
+use crate::kinematics::forward_kinematics_pos;
+use crate::model::{JointType, Model, NO_PARENT};
+
+/// Fills and returns `data.mass_matrix` (nv × nv, row-major, full symmetric),
+/// armature included on the diagonal.
+pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> &'d [f64] {
+    forward_kinematics_pos(model, data, q);
+    crba_from_kinematics(model, data);
+    &data.mass_matrix
+}
+
+/// CRBA after [`forward_kinematics_pos`] on the same `q`.
+pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
+    let nv = model.nv;
+    for i in 0..model.nbodies {
+        data.ia[i] = data.inertia_ref[i].to_sym6();
+    }
+    for i in (1..model.nbodies).rev() {
+        let ic = data.ia[i];
+        data.ia[model.parent[i]] += ic;
+    }
+    let mm = &mut data.mass_matrix;
+    for i in (1..model.nbodies).rev() {
+        let iv = model.idx_v[i];
+        let f = data.ia[i].mul_motion(data.s[i]);
+        mm[iv * nv + iv] = data.s[i].dot(f) + model.armature[iv];
+        let mut j = model.parent[i];
+        while j != NO_PARENT {
+            match model.joint_type[j] {
+                JointType::Free => {
+                    for k in 0..6 {
+                        let x = data.s_base[k].dot(f);
+                        mm[iv * nv + k] = x;
+                        mm[k * nv + iv] = x;
+                    }
+                }
+                JointType::Anchored => {}
+                _ => {
+                    let jv = model.idx_v[j];
+                    let x = data.s[j].dot(f);
+                    mm[iv * nv + jv] = x;
+                    mm[jv * nv + iv] = x;
+                }
+            }
+            j = model.parent[j];
+        }
+    }
+    if model.joint_type[0] == JointType::Free {
+        for k in 0..6 {
+            let f = data.ia[0].mul_motion(data.s_base[k]);
+            for l in k..6 {
+                let x = data.s_base[l].dot(f);
+                mm[l * nv + k] = x;
+                mm[k * nv + l] = x;
+            }
+        }
+    }
+}

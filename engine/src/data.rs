@@ -1,0 +1,125 @@
+//! Preallocated state-dependent workspace (Pinocchio's `Data`, MuJoCo's `mjData`).
+//!
+//! Sized once from a [`Model`]; no algorithm allocates. Spatial quantities are
+//! expressed in the robot's *reference frame*: world-aligned axes, about the
+//! world-fixed point [`Data::origin`] that coincides with the base origin when
+//! [`crate::kinematics::forward_kinematics`] last ran.
+
+use crate::model::Model;
+use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
+use glam::DVec3;
+
+/// Workspace and outputs of the algorithms, grouped by the stage that writes them.
+#[derive(Clone, Debug)]
+pub struct Data {
+    // --- kinematics (forward_kinematics) ---
+    /// Reference point of all spatial quantities: the base origin in the world (m).
+    pub origin: DVec3,
+    /// World placement of each body frame (`oMi`) (nbodies).
+    pub pose: Vec<Transform>,
+    /// Spatial velocity of each body, reference frame (nbodies).
+    pub vel: Vec<Motion>,
+    /// Motion subspace column of each 1-DOF body, reference frame (nbodies; base unused).
+    pub s: Vec<Motion>,
+    /// Motion subspace of the free base, reference frame: columns for `v[0..6]`.
+    pub s_base: [Motion; 6],
+    /// Each body's rigid inertia in the reference frame (CoM relative to `origin`) (nbodies).
+    pub inertia_ref: Vec<RigidInertia>,
+
+    // --- dynamics (rnea / aba / crba) ---
+    /// Spatial acceleration of each body, reference frame (nbodies).
+    pub acc: Vec<Motion>,
+    /// Spatial force transmitted by each body's parent joint (RNEA), reference frame (nbodies).
+    pub f: Vec<Force>,
+    /// External spatial force on each body, world axes about `origin` (nbodies).
+    /// Set by the caller (contacts, pushes) after kinematics; see [`Data::add_point_force`].
+    pub f_ext: Vec<Force>,
+    /// Articulated (ABA) or composite (CRBA) inertia of each body, reference frame (nbodies).
+    pub ia: Vec<Sym6>,
+    /// Articulated bias force (ABA) (nbodies).
+    pub pa: Vec<Force>,
+    /// `U = Iᴬ S` for each 1-DOF body (ABA) (nbodies).
+    pub u: Vec<Force>,
+    /// `1 / D`, `D = Sᵀ U + armature` (ABA) (nbodies).
+    pub d_inv: Vec<f64>,
+    /// `u = τ − Sᵀ pᴬ` (ABA) (nbodies).
+    pub u_tau: Vec<f64>,
+    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (nbodies).
+    pub c: Vec<Motion>,
+
+    // --- outputs ---
+    /// Generalised acceleration from ABA (nv).
+    pub ddq: Vec<f64>,
+    /// Generalised force from RNEA (nv).
+    pub tau: Vec<f64>,
+    /// Joint-space mass matrix from CRBA, full symmetric, row-major (nv × nv).
+    pub mass_matrix: Vec<f64>,
+    /// Nonlinear effects `C(q, v) v + g(q)` (nv).
+    pub nle: Vec<f64>,
+    /// Generalised gravity `g(q)` (nv).
+    pub gravity: Vec<f64>,
+    /// Point Jacobian, row-major 3 × nv, world axes (see [`crate::jacobian`]).
+    pub jacobian: Vec<f64>,
+    /// Scratch of length nv.
+    pub scratch_v: Vec<f64>,
+    /// Scratch of length nv × nv (factorisations).
+    pub scratch_vv: Vec<f64>,
+}
+
+impl Data {
+    /// Allocates the workspace for `model`.
+    pub fn new(model: &Model) -> Data {
+        let nb = model.nbodies;
+        let nv = model.nv;
+        Data {
+            origin: DVec3::ZERO,
+            pose: vec![Transform::IDENTITY; nb],
+            vel: vec![Motion::ZERO; nb],
+            s: vec![Motion::ZERO; nb],
+            s_base: [Motion::ZERO; 6],
+            inertia_ref: vec![RigidInertia::ZERO; nb],
+            acc: vec![Motion::ZERO; nb],
+            f: vec![Force::ZERO; nb],
+            f_ext: vec![Force::ZERO; nb],
+            ia: vec![Sym6::ZERO; nb],
+            pa: vec![Force::ZERO; nb],
+            u: vec![Force::ZERO; nb],
+            d_inv: vec![0.0; nb],
+            u_tau: vec![0.0; nb],
+            c: vec![Motion::ZERO; nb],
+            ddq: vec![0.0; nv],
+            tau: vec![0.0; nv],
+            mass_matrix: vec![0.0; nv * nv],
+            nle: vec![0.0; nv],
+            gravity: vec![0.0; nv],
+            jacobian: vec![0.0; 3 * nv],
+            scratch_v: vec![0.0; nv],
+            scratch_vv: vec![0.0; nv * nv],
+        }
+    }
+
+    /// Clears every external force.
+    pub fn clear_external_forces(&mut self) {
+        self.f_ext.fill(Force::ZERO);
+    }
+
+    /// Adds a force `force_n` (N, world frame) acting on `body` at the world point `point_m`.
+    /// Valid until the next kinematics call moves [`Data::origin`].
+    #[inline]
+    pub fn add_point_force(&mut self, body: usize, point_m: DVec3, force_n: DVec3) {
+        self.f_ext[body] += Force::at_point(force_n, point_m - self.origin);
+    }
+
+    /// World position of a point given in a body's frame (after kinematics).
+    #[inline]
+    pub fn body_point_world(&self, body: usize, point_in_body: DVec3) -> DVec3 {
+        self.pose[body].transform_point(point_in_body)
+    }
+
+    /// World velocity (m/s) of a point given in a body's frame (after kinematics with velocity).
+    #[inline]
+    pub fn body_point_velocity(&self, body: usize, point_in_body: DVec3) -> DVec3 {
+        let p = self.pose[body].transform_point(point_in_body);
+        self.vel[body].point_velocity(p - self.origin)
+    }
+}

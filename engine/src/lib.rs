@@ -1,0 +1,35 @@
+//! quadsim's physics and control core: reduced-coordinate rigid-body dynamics in
+//! f64 on plain data, with no ECS in it.
+//!
+//! The immutable [`model::Model`] (topology, placements, inertias, joint axes and
+//! limits) lives beside the preallocated [`data::Data`] workspace, as Pinocchio's
+//! `Model`/`Data` do. Each algorithm has its own file and fills named fields of
+//! `Data`:
+//!
+//! | algorithm | file | fills |
+//! |---|---|---|
+//! | forward kinematics | [`kinematics`] | `pose`, `vel`, `s`, `inertia_ref` |
+//! | RNEA (inverse dynamics) | [`rnea`] | `tau` |
+//! | CRBA (mass matrix) | [`crba`] | `mass_matrix` |
+//! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
+//! | ABA (forward dynamics) | [`aba`] | `ddq` |
+//! | point Jacobians | [`jacobian`] | `jacobian` |
+//! | CoM, momentum | [`com`] | (returns) |
+//! | energies | [`energy`] | (returns) |
+
+pub mod aba;
+pub mod com;
+pub mod crba;
+pub mod data;
+pub mod description;
+pub mod energy;
+pub mod jacobian;
+pub mod kinematics;
+pub mod linalg;
+pub mod model;
+pub mod nle;
+pub mod rnea;
+pub mod spatial;
+
+pub use data::Data;
+pub use model::{BaseKind, Model, ModelError};

@@ -1,0 +1,505 @@
+//! The packed, immutable articulation model (Pinocchio's `Model`, MuJoCo's `mjModel`).
+//!
+//! Bodies live in flat arrays with `parent[i] < i` (body 0 is the base). Links
+//! joined by fixed joints are merged into one body; every link remains reachable
+//! as a [`Frame`]. Generalised coordinates follow Pinocchio's conventions:
+//!
+//! - floating base: `q = [x, y, z, qx, qy, qz, qw, joints…]` (position of the base
+//!   origin in the world, unit quaternion rotating base vectors into the world),
+//!   `v = [v_lin, ω, q̇…]` with `v_lin` (velocity of the base origin) and `ω` both
+//!   in the **base** frame;
+//! - fixed base: `q` and `v` hold the joints only.
+//!
+//! Movable joints appear in q and v in the order of the description's joints
+//! (the URDF document order).
+
+use crate::description::{JointKind, RobotDescription};
+use crate::spatial::{RigidInertia, Transform};
+use glam::DVec3;
+use thiserror::Error;
+
+/// Marker for the base's parent.
+pub const NO_PARENT: usize = usize::MAX;
+
+/// How a body moves relative to its parent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointType {
+    /// Six DOF: the floating base (nq 7, nv 6).
+    Free,
+    /// Welded to the world: a fixed base (nq 0, nv 0).
+    Anchored,
+    /// One rotational DOF about `axis`.
+    Revolute,
+    /// One translational DOF along `axis`.
+    Prismatic,
+}
+
+impl JointType {
+    /// Size of the joint's configuration.
+    pub fn nq(self) -> usize {
+        match self {
+            JointType::Free => 7,
+            JointType::Anchored => 0,
+            _ => 1,
+        }
+    }
+
+    /// Size of the joint's velocity.
+    pub fn nv(self) -> usize {
+        match self {
+            JointType::Free => 6,
+            JointType::Anchored => 0,
+            _ => 1,
+        }
+    }
+}
+
+/// Whether the base floats (a free joint) or is welded to the world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BaseKind {
+    /// The base is a free body (legged robots).
+    #[default]
+    Floating,
+    /// The base is welded to the world at the identity.
+    Fixed,
+}
+
+/// A named frame (one per link of the description) attached to a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Link name.
+    pub name: String,
+    /// Body the link belongs to (after fixed joints are merged).
+    pub body: usize,
+    /// Placement of the link frame in the body frame.
+    pub placement: Transform,
+}
+
+/// Errors found while compiling a description.
+#[derive(Debug, Error, PartialEq)]
+pub enum ModelError {
+    /// No link is free of a parent joint.
+    #[error("robot '{robot}': no root link (every link is some joint's child)")]
+    NoRoot {
+        /// Robot name.
+        robot: String,
+    },
+    /// More than one link is free of a parent joint.
+    #[error("robot '{robot}': several root links ({roots}); a robot is one tree")]
+    SeveralRoots {
+        /// Robot name.
+        robot: String,
+        /// The roots found.
+        roots: String,
+    },
+    /// A joint names a link that does not exist.
+    #[error("joint '{joint}': unknown {role} link '{link}'")]
+    UnknownLink {
+        /// Joint name.
+        joint: String,
+        /// `parent` or `child`.
+        role: &'static str,
+        /// The missing link.
+        link: String,
+    },
+    /// Two links or two joints share a name.
+    #[error("duplicate {what} name '{name}'")]
+    Duplicate {
+        /// `link` or `joint`.
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// A link is the child of two joints, or the joints form a loop.
+    #[error("link '{link}' is reached twice (a loop or two parent joints); a robot is a tree")]
+    NotATree {
+        /// The link.
+        link: String,
+    },
+    /// A number is out of its domain.
+    #[error("{item}: field '{field}' = {value} is invalid ({why})")]
+    InvalidValue {
+        /// Link or joint name.
+        item: String,
+        /// Field name.
+        field: &'static str,
+        /// The value.
+        value: f64,
+        /// What is wrong.
+        why: &'static str,
+    },
+    /// A foot names a link that does not exist.
+    #[error("foot '{0}' is not a link of the robot")]
+    UnknownFoot(String),
+}
+
+/// The immutable articulation model. Arrays indexed by body have length
+/// `nbodies`; arrays indexed by velocity have length `nv`.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Robot name.
+    pub name: String,
+    /// Configuration size.
+    pub nq: usize,
+    /// Velocity size.
+    pub nv: usize,
+    /// Number of bodies (after fixed links are merged), including the base.
+    pub nbodies: usize,
+    /// Parent body of each body, `parent[i] < i`; [`NO_PARENT`] for the base.
+    pub parent: Vec<usize>,
+    /// Joint type of each body's parent joint.
+    pub joint_type: Vec<JointType>,
+    /// Name of each body's parent joint (`root_joint` for the base).
+    pub joint_name: Vec<String>,
+    /// Joint frame in the parent body's frame at zero position (nbodies).
+    pub placement: Vec<Transform>,
+    /// Unit joint axis in the body frame (nbodies; zero for the base).
+    pub axis: Vec<DVec3>,
+    /// Inertia of each body in its own frame, fixed children merged (nbodies).
+    pub inertia: Vec<RigidInertia>,
+    /// First index of each body's joint in q (nbodies).
+    pub idx_q: Vec<usize>,
+    /// First index of each body's joint in v (nbodies).
+    pub idx_v: Vec<usize>,
+    /// Body moved by each velocity coordinate (nv).
+    pub v_body: Vec<usize>,
+    /// Lower position limit (rad or m), −∞ when none (nv; base entries −∞).
+    pub lower_limit: Vec<f64>,
+    /// Upper position limit (rad or m), +∞ when none (nv).
+    pub upper_limit: Vec<f64>,
+    /// Effort limit (N·m or N), +∞ when none (nv; base entries +∞).
+    pub effort_limit: Vec<f64>,
+    /// Velocity limit (rad/s or m/s), +∞ when none (nv).
+    pub velocity_limit: Vec<f64>,
+    /// Viscous damping (N·m·s/rad or N·s/m) (nv).
+    pub damping: Vec<f64>,
+    /// Coulomb joint friction (N·m or N) (nv).
+    pub friction: Vec<f64>,
+    /// Reflected rotor inertia on the diagonal of M (kg·m² or kg) (nv).
+    pub armature: Vec<f64>,
+    /// One frame per link of the description, in description order.
+    pub frames: Vec<Frame>,
+    /// Frame index of each foot.
+    pub feet: Vec<usize>,
+    /// Gravity (m/s², world frame).
+    pub gravity: DVec3,
+    /// Whole-robot mass (kg).
+    pub total_mass: f64,
+}
+
+/// Standard gravity used by default (m/s², world z up).
+pub const STANDARD_GRAVITY: DVec3 = DVec3::new(0.0, 0.0, -9.81);
+
+impl Model {
+    /// Compiles a description. The root link becomes body 0 with a free joint
+    /// ([`BaseKind::Floating`]) or welded to the world ([`BaseKind::Fixed`]).
+    pub fn from_description(desc: &RobotDescription, base: BaseKind) -> Result<Model, ModelError> {
+        validate(desc)?;
+        let roots: Vec<&str> = desc
+            .links
+            .iter()
+            .filter(|l| !desc.joints.iter().any(|j| j.child == l.name))
+            .map(|l| l.name.as_str())
+            .collect();
+        let root = match roots.as_slice() {
+            [] => {
+                return Err(ModelError::NoRoot {
+                    robot: desc.name.clone(),
+                });
+            }
+            [r] => *r,
+            _ => {
+                return Err(ModelError::SeveralRoots {
+                    robot: desc.name.clone(),
+                    roots: roots.join(", "),
+                });
+            }
+        };
+        let link_index = |name: &str| desc.links.iter().position(|l| l.name == name);
+
+        // link -> (body, placement in body), filled as the tree is walked
+        let mut link_body: Vec<Option<(usize, Transform)>> = vec![None; desc.links.len()];
+        let root_idx = link_index(root).expect("root exists");
+        link_body[root_idx] = Some((0, Transform::IDENTITY));
+
+        let base_type = match base {
+            BaseKind::Floating => JointType::Free,
+            BaseKind::Fixed => JointType::Anchored,
+        };
+        let mut m = Model {
+            name: desc.name.clone(),
+            nq: base_type.nq(),
+            nv: base_type.nv(),
+            nbodies: 1,
+            parent: vec![NO_PARENT],
+            joint_type: vec![base_type],
+            joint_name: vec!["root_joint".to_string()],
+            placement: vec![Transform::IDENTITY],
+            axis: vec![DVec3::ZERO],
+            inertia: vec![RigidInertia::ZERO],
+            idx_q: vec![0],
+            idx_v: vec![0],
+            v_body: vec![0; base_type.nv()],
+            lower_limit: vec![f64::NEG_INFINITY; base_type.nv()],
+            upper_limit: vec![f64::INFINITY; base_type.nv()],
+            effort_limit: vec![f64::INFINITY; base_type.nv()],
+            velocity_limit: vec![f64::INFINITY; base_type.nv()],
+            damping: vec![0.0; base_type.nv()],
+            friction: vec![0.0; base_type.nv()],
+            armature: vec![0.0; base_type.nv()],
+            frames: Vec::new(),
+            feet: Vec::new(),
+            gravity: STANDARD_GRAVITY,
+            total_mass: 0.0,
+        };
+
+        // Movable joints take q/v slots in document order, whatever the body order.
+        let mut movable_rank = vec![usize::MAX; desc.joints.len()];
+        let mut k = 0;
+        for (ji, j) in desc.joints.iter().enumerate() {
+            if j.is_movable() {
+                movable_rank[ji] = k;
+                k += 1;
+            }
+        }
+        let (q0, v0) = (m.nq, m.nv);
+        m.nq += k;
+        m.nv += k;
+        for v in [
+            &mut m.lower_limit,
+            &mut m.upper_limit,
+            &mut m.effort_limit,
+            &mut m.velocity_limit,
+        ] {
+            v.resize(m.nv, 0.0);
+        }
+        m.damping.resize(m.nv, 0.0);
+        m.friction.resize(m.nv, 0.0);
+        m.armature.resize(m.nv, 0.0);
+        m.v_body.resize(m.nv, 0);
+
+        // Place joints parents-first, keeping document order where the document allows.
+        let mut placed = vec![false; desc.joints.len()];
+        let mut remaining = desc.joints.len();
+        while remaining > 0 {
+            let mut progress = false;
+            for (ji, j) in desc.joints.iter().enumerate() {
+                if placed[ji] {
+                    continue;
+                }
+                let pi = link_index(&j.parent).expect("validated");
+                let Some((pbody, p_in_body)) = link_body[pi] else {
+                    continue;
+                };
+                let ci = link_index(&j.child).expect("validated");
+                if link_body[ci].is_some() {
+                    return Err(ModelError::NotATree {
+                        link: j.child.clone(),
+                    });
+                }
+                let joint_in_body = p_in_body.compose(&j.placement);
+                match j.kind {
+                    JointKind::Fixed => {
+                        link_body[ci] = Some((pbody, joint_in_body));
+                    }
+                    JointKind::Revolute { axis } | JointKind::Prismatic { axis } => {
+                        let b = m.nbodies;
+                        m.nbodies += 1;
+                        m.parent.push(pbody);
+                        m.joint_type
+                            .push(if matches!(j.kind, JointKind::Revolute { .. }) {
+                                JointType::Revolute
+                            } else {
+                                JointType::Prismatic
+                            });
+                        m.joint_name.push(j.name.clone());
+                        m.placement.push(joint_in_body);
+                        m.axis.push(axis.normalize());
+                        m.inertia.push(RigidInertia::ZERO);
+                        let r = movable_rank[ji];
+                        m.idx_q.push(q0 + r);
+                        let iv = v0 + r;
+                        m.idx_v.push(iv);
+                        m.v_body[iv] = b;
+                        let (lo, hi) = j.limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+                        m.lower_limit[iv] = lo;
+                        m.upper_limit[iv] = hi;
+                        m.effort_limit[iv] = j.effort_limit;
+                        m.velocity_limit[iv] = j.velocity_limit;
+                        m.damping[iv] = j.damping;
+                        m.friction[iv] = j.friction;
+                        m.armature[iv] = j.armature;
+                        link_body[ci] = Some((b, Transform::IDENTITY));
+                    }
+                }
+                placed[ji] = true;
+                remaining -= 1;
+                progress = true;
+            }
+            if !progress {
+                let j = desc
+                    .joints
+                    .iter()
+                    .enumerate()
+                    .find(|(i, _)| !placed[*i])
+                    .map(|(_, j)| j)
+                    .expect("remaining");
+                return Err(ModelError::NotATree {
+                    link: j.child.clone(),
+                });
+            }
+        }
+
+        // Merge link inertias into their bodies; one frame per link.
+        for (li, l) in desc.links.iter().enumerate() {
+            let (body, x) = link_body[li].ok_or_else(|| ModelError::NotATree {
+                link: l.name.clone(),
+            })?;
+            let ri = l.rigid_inertia().transformed(&x);
+            m.inertia[body] = m.inertia[body].combined(&ri);
+            m.frames.push(crate::model::Frame {
+                name: l.name.clone(),
+                body,
+                placement: x,
+            });
+        }
+        m.total_mass = desc.links.iter().map(|l| l.mass_kg).sum();
+        for f in desc.foot_names() {
+            let fi = m
+                .frames
+                .iter()
+                .position(|fr| fr.name == f)
+                .ok_or(ModelError::UnknownFoot(f.clone()))?;
+            m.feet.push(fi);
+        }
+        Ok(m)
+    }
+
+    /// Index of the frame (link) with this name.
+    pub fn frame_index(&self, name: &str) -> Option<usize> {
+        self.frames.iter().position(|f| f.name == name)
+    }
+
+    /// Index in v of the movable joint with this name.
+    pub fn joint_v_index(&self, name: &str) -> Option<usize> {
+        (1..self.nbodies)
+            .find(|&b| self.joint_name[b] == name)
+            .map(|b| self.idx_v[b])
+    }
+
+    /// Names of the velocity coordinates' joints, in v order (movable joints only).
+    pub fn movable_joint_names(&self) -> Vec<&str> {
+        let mut out = vec![""; self.nv - self.base_nv()];
+        for b in 1..self.nbodies {
+            out[self.idx_v[b] - self.base_nv()] = &self.joint_name[b];
+        }
+        out
+    }
+
+    /// True for a floating base.
+    pub fn is_floating(&self) -> bool {
+        self.joint_type[0] == JointType::Free
+    }
+
+    /// Size of the base's velocity (6 floating, 0 fixed).
+    pub fn base_nv(&self) -> usize {
+        self.joint_type[0].nv()
+    }
+
+    /// Size of the base's configuration (7 floating, 0 fixed).
+    pub fn base_nq(&self) -> usize {
+        self.joint_type[0].nq()
+    }
+
+    /// The neutral configuration: base at the origin with identity orientation, joints at zero.
+    pub fn neutral_q(&self) -> Vec<f64> {
+        let mut q = vec![0.0; self.nq];
+        if self.is_floating() {
+            q[6] = 1.0;
+        }
+        q
+    }
+}
+
+fn validate(desc: &RobotDescription) -> Result<(), ModelError> {
+    let bad =
+        |item: &str, field: &'static str, value: f64, why: &'static str| ModelError::InvalidValue {
+            item: item.to_string(),
+            field,
+            value,
+            why,
+        };
+    for (i, l) in desc.links.iter().enumerate() {
+        if desc.links[..i].iter().any(|o| o.name == l.name) {
+            return Err(ModelError::Duplicate {
+                what: "link",
+                name: l.name.clone(),
+            });
+        }
+        if !(l.mass_kg.is_finite() && l.mass_kg >= 0.0) {
+            return Err(bad(&l.name, "mass", l.mass_kg, "must be finite and ≥ 0"));
+        }
+        if !l.com_m.is_finite() {
+            return Err(bad(&l.name, "com", f64::NAN, "must be finite"));
+        }
+        if let Some(ii) = l.inertia_kgm2 {
+            if !ii.is_finite() {
+                return Err(bad(&l.name, "inertia", f64::NAN, "must be finite"));
+            }
+            let d = ii.diagonal();
+            for v in [d.x, d.y, d.z] {
+                if v < 0.0 {
+                    return Err(bad(&l.name, "inertia", v, "diagonal must be ≥ 0"));
+                }
+            }
+        }
+    }
+    for (i, j) in desc.joints.iter().enumerate() {
+        if desc.joints[..i].iter().any(|o| o.name == j.name) {
+            return Err(ModelError::Duplicate {
+                what: "joint",
+                name: j.name.clone(),
+            });
+        }
+        for (role, link) in [("parent", &j.parent), ("child", &j.child)] {
+            if desc.link(link).is_none() {
+                return Err(ModelError::UnknownLink {
+                    joint: j.name.clone(),
+                    role,
+                    link: link.clone(),
+                });
+            }
+        }
+        if !j.placement.is_valid(1e-6) {
+            return Err(bad(
+                &j.name,
+                "origin",
+                f64::NAN,
+                "must be finite with an orthonormal rotation",
+            ));
+        }
+        if let JointKind::Revolute { axis } | JointKind::Prismatic { axis } = j.kind {
+            let n = axis.length();
+            if !(n.is_finite() && n > 1e-9) {
+                return Err(bad(&j.name, "axis", n, "must be a non-zero finite vector"));
+            }
+        }
+        if let Some((lo, hi)) = j.limits {
+            if lo.is_nan() || hi.is_nan() || lo > hi {
+                return Err(bad(&j.name, "limit", hi - lo, "lower must be ≤ upper"));
+            }
+        }
+        for (field, v) in [
+            ("effort", j.effort_limit),
+            ("velocity", j.velocity_limit),
+            ("damping", j.damping),
+            ("friction", j.friction),
+            ("armature", j.armature),
+        ] {
+            if v.is_nan() || v < 0.0 {
+                return Err(bad(&j.name, field, v, "must be ≥ 0"));
+            }
+        }
+    }
+    Ok(())
+}

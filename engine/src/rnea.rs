@@ -1,0 +1,66 @@
+//! Recursive Newton–Euler algorithm: inverse dynamics `τ = M(q) a + C(q, v) v + g(q) − Jᵀ f_ext`
+//! (Featherstone 2008, §5.3, Table 5.1, in the fixed-frame form of §5.3 eq. 5.9–5.12).
+
+use crate::data::Data;
+use crate::kinematics::forward_kinematics;
+use crate::model::{JointType, Model};
+use crate::spatial::Motion;
+
+/// Inverse dynamics without external forces. Fills and returns `data.tau` (nv):
+/// for a floating base, `tau[0..6]` is the wrench (force, torque; base frame)
+/// that the base would need. Joint entries include `armature · a`.
+pub fn rnea<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64], a: &[f64]) -> &'d [f64] {
+    forward_kinematics(model, data, q, v);
+    rnea_from_kinematics(model, data, v, a, false);
+    &data.tau
+}
+
+/// RNEA after [`forward_kinematics`] has run on the same `(q, v)`. With
+/// `use_external`, the forces in `data.f_ext` act on the bodies (subtracted).
+pub fn rnea_from_kinematics(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    a: &[f64],
+    use_external: bool,
+) {
+    // Gravity enters as a fictitious upward acceleration of the base (Featherstone §5.3).
+    let a_grav = Motion::new(-model.gravity, glam::DVec3::ZERO);
+    let mut a0 = a_grav;
+    if model.joint_type[0] == JointType::Free {
+        for k in 0..6 {
+            a0 += data.s_base[k] * a[k];
+        }
+    }
+    data.acc[0] = a0;
+    data.f[0] = data.inertia_ref[0].mul_motion(a0)
+        + data.vel[0].cross_force(data.inertia_ref[0].mul_motion(data.vel[0]));
+    if use_external {
+        data.f[0] -= data.f_ext[0];
+    }
+    for i in 1..model.nbodies {
+        let p = model.parent[i];
+        let iv = model.idx_v[i];
+        let vi = data.vel[i];
+        let acc = data.acc[p] + data.s[i] * a[iv] + vi.cross(data.s[i] * v[iv]);
+        data.acc[i] = acc;
+        let inertia = &data.inertia_ref[i];
+        let mut f = inertia.mul_motion(acc) + vi.cross_force(inertia.mul_motion(vi));
+        if use_external {
+            f -= data.f_ext[i];
+        }
+        data.f[i] = f;
+    }
+    for i in (1..model.nbodies).rev() {
+        let iv = model.idx_v[i];
+        data.tau[iv] = data.s[i].dot(data.f[i]) + model.armature[iv] * a[iv];
+        let p = model.parent[i];
+        let fi = data.f[i];
+        data.f[p] += fi;
+    }
+    if model.joint_type[0] == JointType::Free {
+        for k in 0..6 {
+            data.tau[k] = data.s_base[k].dot(data.f[0]);
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! The CLI's error type: every failure names the file and the field at fault.
+
+use thiserror::Error;
+
+/// An error reported to the user, with the exit code 2 for bad input and 1 otherwise.
+#[derive(Debug, Error)]
+pub enum CliError {
+    /// Input that cannot be used: a file, line or field named in the message.
+    #[error("{0}")]
+    BadInput(String),
+    /// An I/O failure on a named path.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+impl CliError {
+    /// Exit code: 2 for bad input, 1 for other failures.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            CliError::BadInput(_) => 2,
+            CliError::Io { .. } => 1,
+        }
+    }
+}
+
+/// Shorthand for bad-input errors.
+pub fn bad(msg: impl Into<String>) -> CliError {
+    CliError::BadInput(msg.into())
+}

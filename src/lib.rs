@@ -1,0 +1,14 @@
+//! quadsim: a data-oriented simulation engine for quadruped robots.
+//!
+//! The root crate holds the command-line interface and model loading (URDF
+//! import, built-in robots by name). The physics core is [`quadsim_engine`],
+//! ECS data is [`quadsim_components`], and the fixed-step schedule is
+//! [`quadsim_systems`].
+
+pub mod cli;
+pub mod error;
+pub mod urdf;
+
+pub use quadsim_components as components;
+pub use quadsim_engine as engine;
+pub use quadsim_systems as systems;

@@ -1,0 +1,1 @@
+//! URDF import (urdf-rs) into an engine [`quadsim_engine::description::RobotDescription`].
