@@ -23,11 +23,13 @@ pub mod crba;
 pub mod data;
 pub mod description;
 pub mod energy;
+pub mod integrate;
 pub mod jacobian;
 pub mod kinematics;
 pub mod linalg;
 pub mod model;
 pub mod nle;
+pub mod passive;
 pub mod rnea;
 pub mod spatial;
 
