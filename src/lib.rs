@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod scenario;
 pub mod urdf;
 
 pub use quadsim_components as components;

@@ -1,0 +1,189 @@
+//! The scenario file format, version 1 (TOML). Every key is documented in
+//! `scenarios/README.md`; `quadsim schema` prints the JSON Schema derived from
+//! these types. Units are in key names (`mass_kg`, `slope_deg`, `dt_s`); SI
+//! elsewhere. World frame: z up, x forward at zero yaw.
+//!
+//! Kind-specific keys (terrain, controller, event) sit flat beside `kind`; the
+//! validator rejects a key that does not belong to the kind, naming it.
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// The format version this build reads.
+pub const FORMAT_VERSION: i64 = 1;
+
+/// A whole scenario file.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// Must be 1.
+    pub format_version: i64,
+    /// World settings.
+    pub world: WorldSpec,
+    /// Terrains; their union is the ground. Empty: only the world's default ground.
+    #[serde(default)]
+    pub terrains: Vec<TerrainSpec>,
+    /// Robots, each with a unique name.
+    #[serde(default)]
+    pub robots: Vec<RobotSpec>,
+    /// Timed events (pushes, commands, payloads).
+    #[serde(default)]
+    pub events: Vec<EventSpec>,
+}
+
+/// Integrator choice.
+#[derive(Debug, Clone, Copy, Deserialize, JsonSchema, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum IntegratorSpec {
+    /// Semi-implicit (symplectic) Euler: the default.
+    #[default]
+    SemiImplicitEuler,
+    /// Classical 4th-order Runge–Kutta; contact forces are evaluated at every stage.
+    Rk4,
+}
+
+/// `[world]`.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WorldSpec {
+    /// Scenario name: names the output directory `runs/<name>/`. Default: the file stem.
+    pub name: Option<String>,
+    /// Fixed time step (s). Default 0.0005.
+    #[serde(default = "default_dt")]
+    pub dt_s: f64,
+    /// Integrator. Default `semi_implicit_euler`.
+    #[serde(default)]
+    pub integrator: IntegratorSpec,
+    /// Gravity (m/s², world frame). Default [0, 0, −9.81].
+    #[serde(default = "default_gravity")]
+    pub gravity_mps2: [f64; 3],
+    /// Simulated duration (s).
+    pub duration_s: f64,
+    /// World seed: every random stream derives from (seed, robot or terrain name). Default 0.
+    #[serde(default)]
+    pub seed: u64,
+    /// Controller rate (Hz); must divide the step rate. Default 500.
+    #[serde(default = "default_rate")]
+    pub controller_rate_hz: f64,
+    /// Ground outside every terrain: a preset name or a custom material. Default: none (robots fall).
+    pub default_ground: Option<GroundSpec>,
+    /// Height of the default ground plane (m). Default 0.
+    #[serde(default)]
+    pub default_ground_height_m: f64,
+}
+
+fn default_dt() -> f64 {
+    0.0005
+}
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+fn default_rate() -> f64 {
+    500.0
+}
+
+/// A ground material: a preset name (`concrete`, `grass`, `mud`, `sand`) or a custom table.
+#[derive(Debug, Clone, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum GroundSpec {
+    /// A preset from Study A.
+    Preset(String),
+    /// A custom material.
+    Custom(CustomGround),
+}
+
+/// A custom ground material.
+#[derive(Debug, Clone, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CustomGround {
+    /// Normal stiffness k (N/m for `linear`; N/mⁿ for `hunt_crossley`).
+    pub stiffness_n_per_m: f64,
+    /// Normal damping b (N·s/m; N·s/mⁿ⁺¹ for `hunt_crossley`).
+    pub damping_ns_per_m: f64,
+    /// Coulomb friction coefficient μ.
+    pub friction: f64,
+    /// Contact law: `linear` (default), `hunt_crossley`, `hybrid`.
+    pub law: Option<String>,
+    /// Hunt–Crossley exponent n (default 1.5).
+    pub exponent: Option<f64>,
+    /// Hybrid law: depth where stiffening starts (m).
+    pub hybrid_depth_m: Option<f64>,
+}
+
+/// `[[terrains]]`: one terrain entity. Keys beside `kind` depend on the kind.
+#[derive(Debug, Deserialize, JsonSchema)]
+pub struct TerrainSpec {
+    /// Unique name (robots refer to it with `terrain`).
+    pub name: String,
+    /// `flat`, `incline`, `sine`, `rough`, `trench`, `stairs`, `boxes`, `stepping_stones`, `heightmap`.
+    pub kind: String,
+    /// Origin of the terrain (m, world): its reference corner/centre, kind-specific.
+    #[serde(default)]
+    pub origin_m: [f64; 3],
+    /// Horizontal extent [x, y] (m), centred on the origin. Default [20, 20].
+    pub extent_m: Option<[f64; 2]>,
+    /// Ground material. Default `concrete`.
+    pub ground: Option<GroundSpec>,
+    /// Every other key, checked against the kind by the validator.
+    #[serde(flatten)]
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
+    pub params: BTreeMap<String, toml::Value>,
+}
+
+/// `[[robots]]`.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Unique name; also seeds the robot's random streams.
+    pub name: String,
+    /// A built-in model (`quad16`, `quad12`) or a path to a URDF (relative to the scenario file).
+    pub model: String,
+    /// Parameter overrides by path (see `quadsim models --params NAME`).
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+    /// Foot link names (default: the model's feet, or the URDF's leaf links).
+    pub feet: Option<Vec<String>>,
+    /// Start position of the base origin (m, world). z is above the terrain under it
+    /// when `start_on_ground` is true. Default: the model's nominal standing height.
+    pub start_position_m: Option<[f64; 3]>,
+    /// Start yaw (deg, about world z).
+    #[serde(default)]
+    pub start_yaw_deg: f64,
+    /// Start joint angles (rad, joint order of the model). Default: the nominal stance.
+    pub start_joints_rad: Option<Vec<f64>>,
+    /// Terrain the robot starts on: its origin is added to `start_position_m`.
+    pub terrain: Option<String>,
+    /// Extra contact points beside the feet: `knees`, `torso` (for fall detection).
+    #[serde(default)]
+    pub contact_points: Vec<String>,
+    /// The controller.
+    #[serde(default)]
+    pub controller: ControllerSpec,
+}
+
+/// `[robots.controller]`. Keys beside `kind` depend on the kind.
+#[derive(Debug, Default, Deserialize, JsonSchema)]
+pub struct ControllerSpec {
+    /// `none`, `joint_pd`, `vmc`, `prescribed`. Default `none`.
+    pub kind: Option<String>,
+    /// Every other key (gains, targets), checked against the kind by the validator.
+    #[serde(flatten)]
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
+    pub params: BTreeMap<String, toml::Value>,
+}
+
+/// `[[events]]`.
+#[derive(Debug, Deserialize, JsonSchema)]
+pub struct EventSpec {
+    /// Simulation time of the event (s).
+    pub t_s: f64,
+    /// Robot name.
+    pub robot: String,
+    /// `push`, `attach`, `detach`, `command`.
+    pub kind: String,
+    /// Every other key, checked against the kind by the validator.
+    #[serde(flatten)]
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
+    pub params: BTreeMap<String, toml::Value>,
+}

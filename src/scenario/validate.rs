@@ -1,0 +1,442 @@
+//! Validation after parsing: domains of numbers, unique names, references
+//! between sections, and the keys each `kind` accepts. Every error names the
+//! key path, which [`super::Locator`] turns into a line and column.
+
+use super::format::{GroundSpec, ScenarioFile};
+use super::spans::path_key;
+use super::{Locator, ScenarioError};
+use std::collections::BTreeMap;
+
+/// The domain a numeric key must lie in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Domain {
+    /// Finite, > 0.
+    Positive,
+    /// Finite, ≥ 0.
+    NonNegative,
+    /// Finite.
+    Finite,
+    /// An integer ≥ 1.
+    Count,
+    /// A string.
+    Text,
+    /// An array of three finite numbers.
+    Vec3,
+    /// An array of tables (checked by the terrain builder).
+    Tables,
+}
+
+/// A key accepted by a `kind`: name, domain, required.
+pub type KeySpec = (&'static str, Domain, bool);
+
+/// Keys of each terrain kind beside `name`, `kind`, `origin_m`, `extent_m`, `ground`.
+pub const TERRAIN_KINDS: &[(&str, &[KeySpec])] = &[
+    ("flat", &[]),
+    (
+        "incline",
+        &[
+            ("slope_deg", Domain::Finite, true),
+            ("direction_deg", Domain::Finite, false),
+        ],
+    ),
+    (
+        "sine",
+        &[
+            ("amplitude_m", Domain::NonNegative, true),
+            ("wavelength_m", Domain::Positive, true),
+            ("direction_deg", Domain::Finite, false),
+        ],
+    ),
+    (
+        "rough",
+        &[
+            ("amplitude_m", Domain::NonNegative, true),
+            ("cell_m", Domain::Positive, false),
+            ("noise", Domain::Text, false),
+        ],
+    ),
+    (
+        "trench",
+        &[
+            ("width_m", Domain::Positive, true),
+            ("depth_m", Domain::Positive, true),
+            ("direction_deg", Domain::Finite, false),
+        ],
+    ),
+    (
+        "stairs",
+        &[
+            ("rise_m", Domain::Positive, true),
+            ("run_m", Domain::Positive, true),
+            ("steps", Domain::Count, true),
+            ("direction", Domain::Text, false),
+        ],
+    ),
+    ("boxes", &[("boxes", Domain::Tables, true)]),
+    (
+        "stepping_stones",
+        &[
+            ("stone_size_m", Domain::Positive, true),
+            ("gap_m", Domain::NonNegative, true),
+            ("height_m", Domain::Positive, false),
+        ],
+    ),
+    (
+        "heightmap",
+        &[
+            ("file", Domain::Text, true),
+            ("horizontal_scale_m", Domain::Positive, true),
+            ("vertical_scale_m", Domain::Positive, true),
+        ],
+    ),
+];
+
+/// Keys of each controller kind beside `kind`.
+pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
+    ("none", &[]),
+    (
+        "joint_pd",
+        &[
+            ("kp_nm_per_rad", Domain::NonNegative, false),
+            ("kd_nms_per_rad", Domain::NonNegative, false),
+            ("gravity_compensation", Domain::Text, false),
+        ],
+    ),
+];
+
+/// Keys of each event kind beside `t_s`, `robot`, `kind`.
+pub const EVENT_KINDS: &[(&str, &[KeySpec])] = &[(
+    "push",
+    &[
+        ("force_n", Domain::Vec3, true),
+        ("duration_s", Domain::Positive, true),
+        ("body", Domain::Text, false),
+        ("point_m", Domain::Vec3, false),
+    ],
+)];
+
+/// The ground presets of Study A.
+pub const GROUND_PRESETS: &[&str] = &["concrete", "grass", "mud", "sand"];
+
+/// Validates a parsed scenario.
+pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError> {
+    let w = &f.world;
+    positive(loc, "world.dt_s", w.dt_s)?;
+    if w.dt_s > 0.01 {
+        return Err(loc.at(
+            "world.dt_s",
+            format!(
+                "{} s is too large for contact dynamics (at most 0.01 s)",
+                w.dt_s
+            ),
+        ));
+    }
+    positive(loc, "world.duration_s", w.duration_s)?;
+    positive(loc, "world.controller_rate_hz", w.controller_rate_hz)?;
+    let ratio = 1.0 / (w.dt_s * w.controller_rate_hz);
+    if ratio < 1.0 - 1e-9 || (ratio - ratio.round()).abs() > 1e-6 {
+        return Err(loc.at(
+            "world.controller_rate_hz",
+            format!(
+                "{} Hz must divide the step rate 1/dt = {} Hz into a whole number of steps",
+                w.controller_rate_hz,
+                1.0 / w.dt_s
+            ),
+        ));
+    }
+    if w.gravity_mps2.iter().any(|g| !g.is_finite()) {
+        return Err(loc.at("world.gravity_mps2", "must be three finite numbers (m/s²)"));
+    }
+    if !w.default_ground_height_m.is_finite() {
+        return Err(loc.at("world.default_ground_height_m", "must be finite (m)"));
+    }
+    if let Some(g) = &w.default_ground {
+        ground(loc, "world.default_ground", g)?;
+    }
+
+    let mut terrain_names: Vec<&str> = Vec::new();
+    for (i, t) in f.terrains.iter().enumerate() {
+        let p = format!("terrains[{i}]");
+        if terrain_names.contains(&t.name.as_str()) {
+            return Err(loc.at(
+                &format!("{p}.name"),
+                format!("duplicate terrain name '{}'", t.name),
+            ));
+        }
+        terrain_names.push(&t.name);
+        if t.origin_m.iter().any(|x| !x.is_finite()) {
+            return Err(loc.at(&format!("{p}.origin_m"), "must be three finite numbers (m)"));
+        }
+        if let Some(e) = t.extent_m {
+            for x in e {
+                if !(x.is_finite() && x > 0.0) {
+                    return Err(loc.at(&format!("{p}.extent_m"), "must be two positive sizes (m)"));
+                }
+            }
+        }
+        if let Some(g) = &t.ground {
+            ground(loc, &format!("{p}.ground"), g)?;
+        }
+        kind_keys(loc, &p, "terrain", &t.kind, TERRAIN_KINDS, &t.params)?;
+    }
+
+    let mut robot_names: Vec<&str> = Vec::new();
+    for (i, r) in f.robots.iter().enumerate() {
+        let p = format!("robots[{i}]");
+        if r.name.is_empty() {
+            return Err(loc.at(&format!("{p}.name"), "must not be empty"));
+        }
+        if robot_names.contains(&r.name.as_str()) {
+            return Err(loc.at(
+                &format!("{p}.name"),
+                format!("duplicate robot name '{}'", r.name),
+            ));
+        }
+        robot_names.push(&r.name);
+        for (k, v) in &r.params {
+            if !v.is_finite() {
+                return Err(loc.at(
+                    &format!("{p}.params.{}", path_key(k)),
+                    "must be a finite number",
+                ));
+            }
+        }
+        if let Some(sp) = r.start_position_m {
+            if sp.iter().any(|x| !x.is_finite()) {
+                return Err(loc.at(
+                    &format!("{p}.start_position_m"),
+                    "must be three finite numbers (m)",
+                ));
+            }
+        }
+        if !r.start_yaw_deg.is_finite() {
+            return Err(loc.at(&format!("{p}.start_yaw_deg"), "must be finite (deg)"));
+        }
+        if let Some(js) = &r.start_joints_rad {
+            if js.iter().any(|x| !x.is_finite()) {
+                return Err(loc.at(&format!("{p}.start_joints_rad"), "must be finite (rad)"));
+            }
+        }
+        if let Some(t) = &r.terrain {
+            if !terrain_names.contains(&t.as_str()) {
+                return Err(loc.at(
+                    &format!("{p}.terrain"),
+                    format!("unknown terrain '{t}' (terrains: {})", list(&terrain_names)),
+                ));
+            }
+        }
+        for (j, c) in r.contact_points.iter().enumerate() {
+            if !["knees", "torso"].contains(&c.as_str()) {
+                return Err(loc.at(
+                    &format!("{p}.contact_points[{j}]"),
+                    format!("unknown contact point set '{c}' (knees, torso)"),
+                ));
+            }
+        }
+        let kind = r
+            .controller
+            .kind
+            .clone()
+            .unwrap_or_else(|| "none".to_string());
+        kind_keys(
+            loc,
+            &format!("{p}.controller"),
+            "controller",
+            &kind,
+            CONTROLLER_KINDS,
+            &r.controller.params,
+        )?;
+    }
+
+    for (i, e) in f.events.iter().enumerate() {
+        let p = format!("events[{i}]");
+        if !(e.t_s.is_finite() && e.t_s >= 0.0) {
+            return Err(loc.at(&format!("{p}.t_s"), "must be a finite time ≥ 0 (s)"));
+        }
+        if !robot_names.contains(&e.robot.as_str()) {
+            return Err(loc.at(
+                &format!("{p}.robot"),
+                format!(
+                    "unknown robot '{}' (robots: {})",
+                    e.robot,
+                    list(&robot_names)
+                ),
+            ));
+        }
+        kind_keys(loc, &p, "event", &e.kind, EVENT_KINDS, &e.params)?;
+    }
+    Ok(())
+}
+
+fn list(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none defined".to_string()
+    } else {
+        names.join(", ")
+    }
+}
+
+fn positive(loc: &Locator<'_>, path: &str, v: f64) -> Result<(), ScenarioError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(loc.at(path, format!("must be a finite number > 0, got {v}")))
+    }
+}
+
+fn ground(loc: &Locator<'_>, path: &str, g: &GroundSpec) -> Result<(), ScenarioError> {
+    match g {
+        GroundSpec::Preset(name) => {
+            if GROUND_PRESETS.contains(&name.as_str()) {
+                Ok(())
+            } else {
+                Err(loc.at(
+                    path,
+                    format!(
+                        "unknown ground preset '{name}' (presets: {})",
+                        GROUND_PRESETS.join(", ")
+                    ),
+                ))
+            }
+        }
+        GroundSpec::Custom(c) => {
+            positive(
+                loc,
+                &format!("{path}.stiffness_n_per_m"),
+                c.stiffness_n_per_m,
+            )?;
+            if !(c.damping_ns_per_m.is_finite() && c.damping_ns_per_m >= 0.0) {
+                return Err(loc.at(
+                    &format!("{path}.damping_ns_per_m"),
+                    "must be finite and ≥ 0",
+                ));
+            }
+            if !(c.friction.is_finite() && c.friction >= 0.0) {
+                return Err(loc.at(&format!("{path}.friction"), "must be finite and ≥ 0"));
+            }
+            if let Some(law) = &c.law {
+                if !["linear", "hunt_crossley", "hybrid"].contains(&law.as_str()) {
+                    return Err(loc.at(
+                        &format!("{path}.law"),
+                        format!("unknown law '{law}' (linear, hunt_crossley, hybrid)"),
+                    ));
+                }
+            }
+            if let Some(n) = c.exponent {
+                if !(n.is_finite() && n >= 1.0) {
+                    return Err(loc.at(&format!("{path}.exponent"), "must be ≥ 1"));
+                }
+            }
+            if let Some(d) = c.hybrid_depth_m {
+                positive(loc, &format!("{path}.hybrid_depth_m"), d)?;
+            }
+            Ok(())
+        }
+    }
+}
+
+fn kind_keys(
+    loc: &Locator<'_>,
+    path: &str,
+    what: &str,
+    kind: &str,
+    kinds: &[(&str, &[KeySpec])],
+    params: &BTreeMap<String, toml::Value>,
+) -> Result<(), ScenarioError> {
+    let Some((_, keys)) = kinds.iter().find(|(k, _)| *k == kind) else {
+        let names: Vec<&str> = kinds.iter().map(|(k, _)| *k).collect();
+        return Err(loc.at(
+            &format!("{path}.kind"),
+            format!("unknown {what} kind '{kind}' (kinds: {})", names.join(", ")),
+        ));
+    };
+    for (k, v) in params {
+        let kp = format!("{path}.{}", path_key(k));
+        let Some((_, dom, _)) = keys.iter().find(|(name, _, _)| name == k) else {
+            let names: Vec<&str> = keys.iter().map(|(n, _, _)| *n).collect();
+            return Err(loc.at(
+                &kp,
+                format!(
+                    "unknown key '{k}' for {what} kind '{kind}' (its keys: {})",
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            ));
+        };
+        check_domain(loc, &kp, *dom, v)?;
+    }
+    for (name, _, required) in keys.iter() {
+        if *required && !params.contains_key(*name) {
+            return Err(loc.at(path, format!("{what} kind '{kind}' needs the key '{name}'")));
+        }
+    }
+    Ok(())
+}
+
+fn as_f64(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+fn check_domain(
+    loc: &Locator<'_>,
+    path: &str,
+    dom: Domain,
+    v: &toml::Value,
+) -> Result<(), ScenarioError> {
+    let bad = |msg: &str| Err(loc.at(path, msg.to_string()));
+    match dom {
+        Domain::Text => match v {
+            toml::Value::String(_) => Ok(()),
+            _ => bad("must be a string"),
+        },
+        Domain::Tables => match v {
+            toml::Value::Array(a) if a.iter().all(|x| x.is_table()) => Ok(()),
+            _ => bad("must be an array of tables"),
+        },
+        Domain::Vec3 => match v {
+            toml::Value::Array(a)
+                if a.len() == 3 && a.iter().all(|x| as_f64(x).is_some_and(f64::is_finite)) =>
+            {
+                Ok(())
+            }
+            _ => bad("must be an array of three finite numbers"),
+        },
+        Domain::Count => match v {
+            toml::Value::Integer(i) if *i >= 1 => Ok(()),
+            _ => bad("must be an integer ≥ 1"),
+        },
+        Domain::Positive | Domain::NonNegative | Domain::Finite => {
+            let Some(x) = as_f64(v) else {
+                return bad("must be a number");
+            };
+            let ok = x.is_finite()
+                && match dom {
+                    Domain::Positive => x > 0.0,
+                    Domain::NonNegative => x >= 0.0,
+                    _ => true,
+                };
+            if ok {
+                Ok(())
+            } else {
+                Err(loc.at(
+                    path,
+                    format!(
+                        "must be a finite number{}, got {x}",
+                        match dom {
+                            Domain::Positive => " > 0",
+                            Domain::NonNegative => " ≥ 0",
+                            _ => "",
+                        }
+                    ),
+                ))
+            }
+        }
+    }
+}
