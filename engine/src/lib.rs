@@ -31,6 +31,7 @@ pub mod model;
 pub mod nle;
 pub mod passive;
 pub mod rnea;
+pub mod robots;
 pub mod spatial;
 
 pub use data::Data;

@@ -1,0 +1,154 @@
+//! The built-in parametric robots of the two source studies, by name.
+//!
+//! | name | study | DOF | mass at defaults | module |
+//! |---|---|---|---|---|
+//! | `quad16` | A: mammal-like, hip roll/pitch, knee, ankle | 16 | 28 kg | [`quad16`] |
+//! | `quad12` | B: small trotter, D-H legs (hip yaw, pitch, knee) | 12 | 12 kg | [`quad12`] |
+//!
+//! At their defaults both equal the shared reference URDFs
+//! (`models/quad16.urdf`, `models/quad12.urdf`) in every link, joint, frame,
+//! mass, CoM and inertia, with the same link and joint names and the same q/v
+//! order (movable joints in URDF document order: legs LF, RF, RH, LH, and
+//! proximal to distal within a leg). Only the actuator limits differ: the URDFs
+//! carry placeholders (1000 N·m, 100 rad/s), the built-ins documented
+//! assumptions.
+//!
+//! Every length, radius, mass, mount offset, leg angle and actuator limit is a
+//! parameter addressed by a dotted path (`thigh.length_m`); each robot module
+//! documents its table (unit, default, meaning) and how dependent quantities
+//! follow a change (CoM, inertia, mass). [`params`] returns the table,
+//! [`builtin_with`] applies overrides:
+//!
+//! ```
+//! use quadsim_engine::robots::{builtin, builtin_with};
+//! let long = builtin_with("quad16", &[("thigh.length_m", 0.4)]).unwrap();
+//! // a longer thigh at the same density weighs more
+//! assert!(long.total_mass_kg() > builtin("quad16").unwrap().total_mass_kg());
+//! ```
+//!
+//! Each robot also has a nominal standing configuration ([`nominal_stance`],
+//! [`nominal_base_height_m`], [`nominal_q`]): the joint angles of a stable
+//! stand and the base height that puts the feet' contact points on the ground.
+
+pub mod params;
+pub mod quad12;
+pub mod quad16;
+
+pub use params::{Domain, ParamError, ParamSpec};
+
+use crate::Data;
+use crate::description::RobotDescription;
+use crate::kinematics::{forward_kinematics_pos, frame_pose};
+use crate::model::{BaseKind, Model, ModelError};
+use params::Values;
+
+const NAMES: &[&str] = &[quad16::NAME, quad12::NAME];
+
+/// Names of the built-in robots.
+pub fn builtin_names() -> &'static [&'static str] {
+    NAMES
+}
+
+/// The parameter table of a built-in robot, `None` for an unknown name.
+pub fn params(name: &str) -> Option<&'static [ParamSpec]> {
+    match name {
+        quad16::NAME => Some(quad16::PARAMS),
+        quad12::NAME => Some(quad12::PARAMS),
+        _ => None,
+    }
+}
+
+/// A built-in robot at its default parameters, `None` for an unknown name.
+pub fn builtin(name: &str) -> Option<RobotDescription> {
+    builtin_with(name, &[]).ok()
+}
+
+/// A built-in robot with some parameters overridden by path.
+///
+/// # Errors
+/// [`ParamError::UnknownRobot`] for an unknown name, [`ParamError::UnknownPath`]
+/// (with the closest valid paths) for a path the robot does not have,
+/// [`ParamError::OutOfDomain`] for a value outside the parameter's domain
+/// (a negative length or mass, NaN, …), [`ParamError::Duplicate`] for a path
+/// given twice.
+pub fn builtin_with(name: &str, overrides: &[(&str, f64)]) -> Result<RobotDescription, ParamError> {
+    let unknown = || ParamError::UnknownRobot {
+        name: name.to_string(),
+        valid: NAMES.join(", "),
+    };
+    let specs = params(name).ok_or_else(unknown)?;
+    let values = Values::resolve(name, specs, overrides)?;
+    match name {
+        quad16::NAME => Ok(quad16::build(&values)),
+        quad12::NAME => Ok(quad12::build(&values)),
+        _ => Err(unknown()),
+    }
+}
+
+/// Nominal standing joint angles (rad, q order, one entry per movable joint),
+/// `None` for an unknown name. They depend on no parameter.
+///
+/// - `quad16`: `[0, 0.3, −0.6, 0.3]` per leg (hip roll, hip pitch, knee,
+///   ankle), the oracle's `stand_static` state: feet level, about 15 mm behind
+///   the hips.
+/// - `quad12`: `[0, π/6, π/3]` per leg (hip yaw, hip pitch, knee), the `stand`
+///   keyframe of `models/quad12.xml`: a crouch with the thigh 30° below the
+///   horizontal and the shank vertical, the foot right below the knee.
+pub fn nominal_stance(name: &str) -> Option<Vec<f64>> {
+    match name {
+        quad16::NAME => Some(quad16::STANCE_LEG_RAD.repeat(4)),
+        quad12::NAME => Some(quad12::STANCE_LEG_RAD.repeat(4)),
+        _ => None,
+    }
+}
+
+/// Height of the base origin above flat ground (m) at which the lowest foot
+/// contact point of `desc` touches the ground with the base level and the
+/// joints at `joints_rad` (q order).
+///
+/// # Errors
+/// Those of [`Model::from_description`].
+///
+/// # Panics
+/// When `joints_rad` does not hold one angle per movable joint.
+pub fn stance_base_height_m(
+    desc: &RobotDescription,
+    joints_rad: &[f64],
+) -> Result<f64, ModelError> {
+    let model = Model::from_description(desc, BaseKind::Fixed)?;
+    assert_eq!(joints_rad.len(), model.nq, "one angle per movable joint");
+    let mut data = Data::new(&model);
+    forward_kinematics_pos(&model, &mut data, joints_rad);
+    let lowest = model
+        .feet
+        .iter()
+        .map(|&f| {
+            let point = desc
+                .foot_points
+                .iter()
+                .find(|(n, _)| *n == model.frames[f].name)
+                .map_or(glam::DVec3::ZERO, |(_, p)| *p);
+            frame_pose(&model, &data, f).transform_point(point).z
+        })
+        .fold(f64::INFINITY, f64::min);
+    Ok(-lowest)
+}
+
+/// Nominal base height (m) of a built-in at its defaults: the feet' contact
+/// points on the ground at [`nominal_stance`]. quad16: 0.55 · cos 0.3 + 0.06 ≈
+/// 0.58543 m (the oracle's `stand_static` rounds it to 0.5854); quad12: 0.13 +
+/// 0.01 (pad) = 0.14 m.
+pub fn nominal_base_height_m(name: &str) -> Option<f64> {
+    let desc = builtin(name)?;
+    let stance = nominal_stance(name)?;
+    stance_base_height_m(&desc, &stance).ok()
+}
+
+/// The nominal floating-base configuration of a built-in at its defaults:
+/// `[0, 0, height, 0, 0, 0, 1, stance…]` (Pinocchio order, base level).
+pub fn nominal_q(name: &str) -> Option<Vec<f64>> {
+    let h = nominal_base_height_m(name)?;
+    let mut q = vec![0.0, 0.0, h, 0.0, 0.0, 0.0, 1.0];
+    q.extend(nominal_stance(name)?);
+    Some(q)
+}
