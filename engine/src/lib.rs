@@ -27,12 +27,14 @@ pub mod integrate;
 pub mod jacobian;
 pub mod kinematics;
 pub mod linalg;
+pub mod metrics;
 pub mod model;
 pub mod nle;
 pub mod passive;
 pub mod rnea;
 pub mod robots;
 pub mod spatial;
+pub mod support;
 
 pub use data::Data;
 pub use model::{BaseKind, Model, ModelError};

@@ -1,0 +1,437 @@
+//! Run metrics, accumulated in the simulation at full rate (every step), not
+//! from a decimated log. The exact definition of every metric is written in
+//! `scenarios/README.md` ("Metrics"); the doc of each [`MetricsSummary`] field
+//! repeats it in short.
+
+use crate::spatial::rpy_from_rot;
+use crate::support::stability_margin;
+use glam::{DMat3, DVec2, DVec3};
+
+/// Up to this many feet per robot are tracked for touchdowns and margins.
+pub const MAX_FEET: usize = 8;
+
+/// One foot's state in a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FootSample {
+    /// Whether the foot touches the ground.
+    pub in_contact: bool,
+    /// Contact point in the world (m).
+    pub position_m: DVec3,
+    /// Ground reaction force on the foot (N, world).
+    pub force_n: DVec3,
+}
+
+/// Everything the metrics need from one step (after integration, at time `t_s`).
+#[derive(Clone, Copy, Debug)]
+pub struct StepSample<'a> {
+    /// Simulation time (s).
+    pub t_s: f64,
+    /// Step length (s): the weight of this sample in time integrals.
+    pub dt_s: f64,
+    /// Base (torso) origin in the world (m).
+    pub base_position_m: DVec3,
+    /// Base orientation (base → world).
+    pub base_rotation: DMat3,
+    /// Height of the base origin above the terrain beneath it (m).
+    pub base_height_above_ground_m: f64,
+    /// Whole-body centre of mass (m, world).
+    pub com_m: DVec3,
+    /// Velocity of the centre of mass (m/s, world).
+    pub com_velocity_mps: DVec3,
+    /// Height of the CoM above the terrain beneath it (m).
+    pub com_height_above_ground_m: f64,
+    /// Joint angles (rad), joints only.
+    pub q_joints: &'a [f64],
+    /// Joint velocities (rad/s).
+    pub qd_joints: &'a [f64],
+    /// Actuator torques applied at the joints (N·m).
+    pub tau_joints: &'a [f64],
+    /// Desired joint angles from the controller, when it tracks joint targets.
+    pub q_desired: Option<&'a [f64]>,
+    /// Feet.
+    pub feet: &'a [FootSample],
+    /// Whether the fall criteria hold in this step (see `scenarios/README.md`).
+    pub fallen: bool,
+}
+
+/// The metrics of one robot over a run (SI units; angles in rad).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MetricsSummary {
+    /// Whether the robot fell.
+    pub fell: bool,
+    /// Time of the first fall (s), if any.
+    pub fell_at_s: Option<f64>,
+    /// Time-mean of the CoM velocity along the start heading (m/s).
+    pub mean_forward_speed_mps: f64,
+    /// Largest instantaneous CoM velocity along the start heading (m/s).
+    pub peak_forward_speed_mps: f64,
+    /// Time-mean height of the torso origin above the terrain beneath it (m).
+    pub base_height_mean_m: f64,
+    /// Peak-to-peak of that height (m).
+    pub base_height_p2p_m: f64,
+    /// Time-mean height of the whole-body CoM above the terrain beneath it (m).
+    pub com_height_mean_m: f64,
+    /// Peak-to-peak of that height (m).
+    pub com_height_p2p_m: f64,
+    /// [min, max] roll (rad).
+    pub roll_range_rad: [f64; 2],
+    /// [min, max] pitch (rad).
+    pub pitch_range_rad: [f64; 2],
+    /// [min, max] yaw, unwrapped (rad).
+    pub yaw_range_rad: [f64; 2],
+    /// √(mean over steps and joints of (θ_des − θ)²) (rad); `None` without joint targets.
+    pub joint_rms_error_rad: Option<f64>,
+    /// Largest vertical (world z) ground reaction force on one foot (N).
+    pub max_foot_force_n: f64,
+    /// ∫ Σ_j |τ_j θ̇_j| dt over the actuated joints (J).
+    pub energy_j: f64,
+    /// `energy_j` per foot touchdown; `None` when no foot touched down.
+    pub energy_per_step_j: Option<f64>,
+    /// Foot touchdowns (swing → stance transitions).
+    pub steps: u64,
+    /// Smallest stability margin over the steps with ≥ 3 feet in contact (m); `None` if never.
+    pub min_stability_margin_m: Option<f64>,
+    /// Net horizontal displacement of the CoM over the window (m).
+    pub distance_m: f64,
+}
+
+/// Accumulates [`MetricsSummary`] step by step, without allocating.
+#[derive(Clone, Debug)]
+pub struct MetricsAccumulator {
+    heading: DVec2,
+    window_start_s: f64,
+    started: bool,
+    t0: f64,
+    t_last: f64,
+    time_s: f64,
+    fell_at_s: Option<f64>,
+    speed_integral: f64,
+    peak_speed: f64,
+    base_h: Stat,
+    com_h: Stat,
+    roll: Stat,
+    pitch: Stat,
+    yaw: Stat,
+    yaw_prev: f64,
+    yaw_unwrapped: f64,
+    err_sq: f64,
+    err_n: u64,
+    max_force: f64,
+    energy: f64,
+    touchdowns: u64,
+    prev_contact: [bool; MAX_FEET],
+    have_prev: bool,
+    min_margin: Option<f64>,
+    com_start: DVec3,
+    com_end: DVec3,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Stat {
+    sum: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Stat {
+    const EMPTY: Stat = Stat {
+        sum: 0.0,
+        min: f64::INFINITY,
+        max: f64::NEG_INFINITY,
+    };
+    fn add(&mut self, x: f64, w: f64) {
+        self.sum += x * w;
+        self.min = self.min.min(x);
+        self.max = self.max.max(x);
+    }
+    fn range(&self) -> [f64; 2] {
+        if self.min.is_finite() {
+            [self.min, self.max]
+        } else {
+            [0.0, 0.0]
+        }
+    }
+    fn p2p(&self) -> f64 {
+        if self.min.is_finite() {
+            self.max - self.min
+        } else {
+            0.0
+        }
+    }
+}
+
+impl MetricsAccumulator {
+    /// Starts accumulating. `heading_yaw_rad` sets the forward direction
+    /// (world yaw of the robot at the start); samples before `window_start_s`
+    /// only update falls and touchdown history.
+    pub fn new(heading_yaw_rad: f64, window_start_s: f64) -> Self {
+        Self {
+            heading: DVec2::new(heading_yaw_rad.cos(), heading_yaw_rad.sin()),
+            window_start_s,
+            started: false,
+            t0: 0.0,
+            t_last: 0.0,
+            time_s: 0.0,
+            fell_at_s: None,
+            speed_integral: 0.0,
+            peak_speed: f64::NEG_INFINITY,
+            base_h: Stat::EMPTY,
+            com_h: Stat::EMPTY,
+            roll: Stat::EMPTY,
+            pitch: Stat::EMPTY,
+            yaw: Stat::EMPTY,
+            yaw_prev: 0.0,
+            yaw_unwrapped: 0.0,
+            err_sq: 0.0,
+            err_n: 0,
+            max_force: 0.0,
+            energy: 0.0,
+            touchdowns: 0,
+            prev_contact: [false; MAX_FEET],
+            have_prev: false,
+            min_margin: None,
+            com_start: DVec3::ZERO,
+            com_end: DVec3::ZERO,
+        }
+    }
+
+    /// Adds one step.
+    pub fn record(&mut self, s: &StepSample<'_>) {
+        if s.fallen && self.fell_at_s.is_none() {
+            self.fell_at_s = Some(s.t_s);
+        }
+        let rpy = rpy_from_rot(s.base_rotation);
+        if !self.have_prev {
+            self.yaw_prev = rpy.z;
+            self.yaw_unwrapped = rpy.z;
+        } else {
+            let mut d = rpy.z - self.yaw_prev;
+            d -= (d / std::f64::consts::TAU).round() * std::f64::consts::TAU;
+            self.yaw_unwrapped += d;
+            self.yaw_prev = rpy.z;
+        }
+        let in_window = s.t_s >= self.window_start_s - 1e-12;
+        let mut touchdowns = 0;
+        for (i, f) in s.feet.iter().take(MAX_FEET).enumerate() {
+            if self.have_prev && f.in_contact && !self.prev_contact[i] {
+                touchdowns += 1;
+            }
+            self.prev_contact[i] = f.in_contact;
+        }
+        self.have_prev = true;
+        if !in_window {
+            return;
+        }
+        if !self.started {
+            self.started = true;
+            self.t0 = s.t_s;
+            self.com_start = s.com_m;
+        }
+        self.touchdowns += touchdowns;
+        self.t_last = s.t_s;
+        self.time_s += s.dt_s;
+        self.com_end = s.com_m;
+        let v_fwd = s.com_velocity_mps.truncate().dot(self.heading);
+        self.speed_integral += v_fwd * s.dt_s;
+        self.peak_speed = self.peak_speed.max(v_fwd);
+        self.base_h.add(s.base_height_above_ground_m, s.dt_s);
+        self.com_h.add(s.com_height_above_ground_m, s.dt_s);
+        self.roll.add(rpy.x, s.dt_s);
+        self.pitch.add(rpy.y, s.dt_s);
+        self.yaw.add(self.yaw_unwrapped, s.dt_s);
+        if let Some(qd) = s.q_desired {
+            for (d, q) in qd.iter().zip(s.q_joints) {
+                self.err_sq += (d - q) * (d - q);
+                self.err_n += 1;
+            }
+        }
+        for (tau, qd) in s.tau_joints.iter().zip(s.qd_joints) {
+            self.energy += (tau * qd).abs() * s.dt_s;
+        }
+        let mut pts = [DVec2::ZERO; MAX_FEET];
+        let mut n = 0;
+        for f in s.feet.iter().take(MAX_FEET) {
+            self.max_force = self.max_force.max(f.force_n.z);
+            if f.in_contact {
+                pts[n] = f.position_m.truncate();
+                n += 1;
+            }
+        }
+        if let Some(m) = stability_margin(&pts[..n], s.com_m.truncate()) {
+            self.min_margin = Some(self.min_margin.map_or(m, |x: f64| x.min(m)));
+        }
+    }
+
+    /// The summary so far.
+    pub fn summary(&self) -> MetricsSummary {
+        let t = self.time_s;
+        let mean = |st: &Stat| if t > 0.0 { st.sum / t } else { 0.0 };
+        MetricsSummary {
+            fell: self.fell_at_s.is_some(),
+            fell_at_s: self.fell_at_s,
+            mean_forward_speed_mps: if t > 0.0 {
+                self.speed_integral / t
+            } else {
+                0.0
+            },
+            peak_forward_speed_mps: if self.peak_speed.is_finite() {
+                self.peak_speed
+            } else {
+                0.0
+            },
+            base_height_mean_m: mean(&self.base_h),
+            base_height_p2p_m: self.base_h.p2p(),
+            com_height_mean_m: mean(&self.com_h),
+            com_height_p2p_m: self.com_h.p2p(),
+            roll_range_rad: self.roll.range(),
+            pitch_range_rad: self.pitch.range(),
+            yaw_range_rad: self.yaw.range(),
+            joint_rms_error_rad: (self.err_n > 0).then(|| (self.err_sq / self.err_n as f64).sqrt()),
+            max_foot_force_n: self.max_force,
+            energy_j: self.energy,
+            energy_per_step_j: (self.touchdowns > 0).then(|| self.energy / self.touchdowns as f64),
+            steps: self.touchdowns,
+            min_stability_margin_m: self.min_margin,
+            distance_m: (self.com_end - self.com_start).truncate().length(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample<'a>(
+        t: f64,
+        dt: f64,
+        com: DVec3,
+        vel: DVec3,
+        feet: &'a [FootSample],
+        tau: &'a [f64],
+        qd: &'a [f64],
+    ) -> StepSample<'a> {
+        StepSample {
+            t_s: t,
+            dt_s: dt,
+            base_position_m: com,
+            base_rotation: DMat3::IDENTITY,
+            base_height_above_ground_m: com.z,
+            com_m: com,
+            com_velocity_mps: vel,
+            com_height_above_ground_m: com.z,
+            q_joints: qd,
+            qd_joints: qd,
+            tau_joints: tau,
+            q_desired: None,
+            feet,
+            fallen: false,
+        }
+    }
+
+    #[test]
+    fn body_driven_at_one_metre_per_second() {
+        // A body moved at exactly 1 m/s along its heading (yaw 30°) for 2 s.
+        let yaw = 30f64.to_radians();
+        let dir = DVec3::new(yaw.cos(), yaw.sin(), 0.0);
+        let mut m = MetricsAccumulator::new(yaw, 0.0);
+        let dt = 0.001;
+        for k in 1..=2000 {
+            let t = k as f64 * dt;
+            m.record(&sample(t, dt, dir * t + DVec3::Z * 0.5, dir, &[], &[], &[]));
+        }
+        let s = m.summary();
+        assert!(
+            (s.mean_forward_speed_mps - 1.0).abs() < 1e-12,
+            "{}",
+            s.mean_forward_speed_mps
+        );
+        assert!((s.peak_forward_speed_mps - 1.0).abs() < 1e-12);
+        assert!((s.distance_m - 1.999).abs() < 1e-9, "{}", s.distance_m);
+        assert_eq!(s.base_height_p2p_m, 0.0);
+    }
+
+    #[test]
+    fn joint_energy_is_the_analytic_integral() {
+        // τ = 2 N·m at θ̇ = −3 rad/s on one joint and 1 N·m at 1 rad/s on another for 1.5 s:
+        // E = (|2·(−3)| + |1·1|)·1.5 = 10.5 J
+        let mut m = MetricsAccumulator::new(0.0, 0.0);
+        let dt = 0.0005;
+        for k in 1..=3000 {
+            m.record(&sample(
+                k as f64 * dt,
+                dt,
+                DVec3::Z,
+                DVec3::ZERO,
+                &[],
+                &[2.0, 1.0],
+                &[-3.0, 1.0],
+            ));
+        }
+        assert!((m.summary().energy_j - 10.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn touchdowns_and_margin() {
+        let mut feet = [
+            FootSample {
+                in_contact: true,
+                position_m: DVec3::new(0.25, 0.15, 0.0),
+                force_n: DVec3::Z * 70.0,
+            },
+            FootSample {
+                in_contact: true,
+                position_m: DVec3::new(0.25, -0.15, 0.0),
+                force_n: DVec3::Z * 70.0,
+            },
+            FootSample {
+                in_contact: true,
+                position_m: DVec3::new(-0.25, -0.15, 0.0),
+                force_n: DVec3::Z * 70.0,
+            },
+            FootSample {
+                in_contact: true,
+                position_m: DVec3::new(-0.25, 0.15, 0.0),
+                force_n: DVec3::Z * 70.0,
+            },
+        ];
+        let mut m = MetricsAccumulator::new(0.0, 0.0);
+        m.record(&sample(
+            0.001,
+            0.001,
+            DVec3::new(-0.05, 0.0, 0.5),
+            DVec3::ZERO,
+            &feet,
+            &[],
+            &[],
+        ));
+        feet[0].in_contact = false;
+        m.record(&sample(
+            0.002,
+            0.001,
+            DVec3::new(-0.05, 0.0, 0.5),
+            DVec3::ZERO,
+            &feet,
+            &[],
+            &[],
+        ));
+        feet[0].in_contact = true;
+        feet[0].force_n.z = 150.0;
+        m.record(&sample(
+            0.003,
+            0.001,
+            DVec3::new(-0.05, 0.0, 0.5),
+            DVec3::ZERO,
+            &feet,
+            &[],
+            &[],
+        ));
+        let s = m.summary();
+        assert_eq!(s.steps, 1);
+        assert_eq!(s.max_foot_force_n, 150.0);
+        // with foot 0 lifted, the CoM projection (−0.05, 0) is nearest to the
+        // diagonal y = −0.6 x: distance |0.3·(−0.05) − (−0.5)·0| / √(0.5² + 0.3²)
+        let diag = (0.5f64 * 0.5 + 0.3 * 0.3).sqrt();
+        let tri_margin = 0.015 / diag;
+        assert!((s.min_stability_margin_m.unwrap() - tri_margin).abs() < 1e-12);
+    }
+}

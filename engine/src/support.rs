@@ -1,0 +1,139 @@
+//! Support polygon and static stability margin.
+//!
+//! The support polygon is the convex hull of the contact feet projected on the
+//! horizontal plane (world x, y). The stability margin is the signed distance
+//! from the CoM's ground projection to the polygon's nearest edge: positive
+//! inside, negative outside (Study B: "least distance from the CoM's ground
+//! projection to the support polygon's edge").
+
+use glam::DVec2;
+
+/// Convex hull of up to `N` points (Andrew's monotone chain), counter-clockwise,
+/// written into `hull`; returns the number of hull vertices. No allocation.
+pub fn convex_hull<const N: usize>(points: &[DVec2], hull: &mut [DVec2; N]) -> usize {
+    let n = points.len().min(N);
+    let mut pts = [DVec2::ZERO; N];
+    pts[..n].copy_from_slice(&points[..n]);
+    let pts = &mut pts[..n];
+    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    if n < 3 {
+        hull[..n].copy_from_slice(pts);
+        return n;
+    }
+    let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+    let mut tmp = [DVec2::ZERO; 64];
+    assert!(2 * N <= 64, "convex_hull supports up to 32 points");
+    let mut k = 0;
+    for &p in pts.iter() {
+        while k >= 2 && cross(tmp[k - 2], tmp[k - 1], p) <= 0.0 {
+            k -= 1;
+        }
+        tmp[k] = p;
+        k += 1;
+    }
+    let lower = k + 1;
+    for &p in pts.iter().rev().skip(1) {
+        while k >= lower && cross(tmp[k - 2], tmp[k - 1], p) <= 0.0 {
+            k -= 1;
+        }
+        tmp[k] = p;
+        k += 1;
+    }
+    let m = (k - 1).min(N);
+    hull[..m].copy_from_slice(&tmp[..m]);
+    m
+}
+
+/// Signed distance (m) from `p` to the boundary of the convex polygon `poly`
+/// (counter-clockwise): positive inside, negative outside. `None` for fewer
+/// than three vertices (no area: no static support).
+pub fn signed_margin(poly: &[DVec2], p: DVec2) -> Option<f64> {
+    let n = poly.len();
+    if n < 3 {
+        return None;
+    }
+    let mut inside = true;
+    let mut min_edge = f64::INFINITY;
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
+        let e = b - a;
+        let len = e.length();
+        if len == 0.0 {
+            continue;
+        }
+        // signed distance to the edge's line, positive on the inner (left) side
+        let d_line = e.perp_dot(p - a) / len;
+        if d_line < 0.0 {
+            inside = false;
+        }
+        // distance to the segment
+        let t = ((p - a).dot(e) / (len * len)).clamp(0.0, 1.0);
+        let d_seg = (a + e * t - p).length();
+        min_edge = min_edge.min(d_seg);
+    }
+    Some(if inside { min_edge } else { -min_edge })
+}
+
+/// Stability margin of a CoM projection over the given contact points (x, y):
+/// `None` with fewer than three points in contact.
+pub fn stability_margin(contacts: &[DVec2], com_xy: DVec2) -> Option<f64> {
+    if contacts.len() < 3 {
+        return None;
+    }
+    let mut hull = [DVec2::ZERO; 16];
+    let n = convex_hull(contacts, &mut hull);
+    signed_margin(&hull[..n], com_xy)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rectangle_margin_is_distance_to_nearest_edge() {
+        let feet = [
+            DVec2::new(0.25, 0.15),
+            DVec2::new(0.25, -0.15),
+            DVec2::new(-0.25, -0.15),
+            DVec2::new(-0.25, 0.15),
+        ];
+        assert!((stability_margin(&feet, DVec2::ZERO).unwrap() - 0.15).abs() < 1e-15);
+        assert!((stability_margin(&feet, DVec2::new(0.2, 0.0)).unwrap() - 0.05).abs() < 1e-15);
+        // outside: negative
+        assert!((stability_margin(&feet, DVec2::new(0.0, 0.25)).unwrap() + 0.10).abs() < 1e-15);
+    }
+
+    #[test]
+    fn triangle_margin_matches_inradius() {
+        // equilateral triangle of side s: inradius s / (2√3)
+        let s = 0.4;
+        let h = s * 3f64.sqrt() / 2.0;
+        let tri = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(s, 0.0),
+            DVec2::new(s / 2.0, h),
+        ];
+        let centroid = DVec2::new(s / 2.0, h / 3.0);
+        let m = stability_margin(&tri, centroid).unwrap();
+        assert!((m - s / (2.0 * 3f64.sqrt())).abs() < 1e-14);
+    }
+
+    #[test]
+    fn two_feet_give_no_margin() {
+        assert!(stability_margin(&[DVec2::ZERO, DVec2::X], DVec2::ZERO).is_none());
+    }
+
+    #[test]
+    fn hull_drops_interior_points() {
+        let pts = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(0.5, 0.2),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(0.0, 1.0),
+        ];
+        let mut hull = [DVec2::ZERO; 8];
+        assert_eq!(convex_hull(&pts, &mut hull), 4);
+    }
+}
