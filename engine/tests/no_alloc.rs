@@ -79,6 +79,7 @@ fn allocations_in(f: impl FnOnce()) -> usize {
 /// joint-space push on the last body's origin (through `Jᵀ f` into `tau`):
 /// state-dependent, evaluated at every stage, like a contact model.
 struct Ground {
+    height_m: f64,
     stiffness_n_per_m: f64,
     damping_ns_per_m: f64,
     /// Point forces applied so far (proves the model acted).
@@ -89,9 +90,11 @@ impl ForceModel for Ground {
     fn apply(&mut self, model: &Model, data: &mut Data, _q: &[f64], _v: &[f64], tau: &mut [f64]) {
         for b in 0..model.nbodies {
             let p = data.body_point_world(b, DVec3::ZERO);
-            if p.z < 0.0 {
+            if p.z < self.height_m {
                 let vel = data.body_point_velocity(b, DVec3::ZERO);
-                let fz = (-self.stiffness_n_per_m * p.z - self.damping_ns_per_m * vel.z).max(0.0);
+                let fz = (self.stiffness_n_per_m * (self.height_m - p.z)
+                    - self.damping_ns_per_m * vel.z)
+                    .max(0.0);
                 data.add_point_force(b, p, DVec3::new(-0.1 * vel.x, -0.1 * vel.y, fz));
                 self.contacts += 1;
             }
@@ -115,6 +118,8 @@ fn assert_no_allocation(model: &Model) {
     let a = common::random_vec(5, model.nv, 2.0);
     let mut q_out = vec![0.0; model.nq];
     let mut ground = Ground {
+        // a fixed base sits at the origin: raise the ground so that it acts
+        height_m: if model.is_floating() { 0.0 } else { 1.0 },
         stiffness_n_per_m: 1e4,
         damping_ns_per_m: 100.0,
         contacts: 0,
