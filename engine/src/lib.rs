@@ -19,6 +19,7 @@
 
 pub mod aba;
 pub mod com;
+pub mod control;
 pub mod crba;
 pub mod data;
 pub mod description;

@@ -1,0 +1,5 @@
+//! Controllers as pure functions on plain data. Sign convention for every
+//! controller here: a positive joint torque τ accelerates the joint positively
+//! about its axis (the same τ that enters `M q̈ + C q̇ + g = τ + Jᵀ f_ext`).
+
+pub mod joint_pd;
