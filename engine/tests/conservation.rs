@@ -72,14 +72,16 @@ fn zero_gravity(mut m: Model) -> Model {
     m
 }
 
-/// Conservation at the settings: dt = 0.5 ms, RK4, 10 s.
-fn check_conservation(model: &Model, seed: u64) {
+/// Conservation at the settings: dt = 0.5 ms, RK4, 10 s. With
+/// `truncation_dominated`, also asserts that halving dt cuts the energy error
+/// at least 12×. That holds only where the truncation error stands above the
+/// round-off floor of 20 000 steps (~1e-14·T0): true for quad16 (~1.6e-12·T0),
+/// not for the slower random tree (~1.5e-14·T0), whose order is checked at a
+/// larger dt by `check_fourth_order`.
+fn check_conservation(model: &Model, seed: u64, truncation_dominated: bool) {
     let dt = 5e-4;
     let a = run(model, seed, dt, 10.0);
     let b = run(model, seed, dt / 2.0, 10.0);
-    // At 0.5 ms the truncation error (~1e-14·T0) is already at round-off, so
-    // the dt/2 ratio here is printed for the record, not asserted (see
-    // `check_fourth_order`).
     eprintln!(
         "{}: T0 = {:.6} J; dt = {dt} s: {a:?}; dt/2: {b:?}; energy ratio {:.2}",
         model.name,
@@ -89,12 +91,18 @@ fn check_conservation(model: &Model, seed: u64) {
     assert!(a.energy <= 1e-6 * a.t0, "energy drift {a:?}");
     assert!(a.linear <= 1e-9, "linear momentum drift {a:?}");
     assert!(a.angular <= 1e-6, "angular momentum drift {a:?}");
+    if truncation_dominated {
+        assert!(
+            a.energy >= 12.0 * b.energy,
+            "halving dt cut the energy error only {:.2}× ({a:?} vs {b:?})",
+            a.energy / b.energy
+        );
+    }
 }
 
 /// RK4's energy error is O(dt⁴): halving dt must cut it at least 12× (16×
-/// ideally). Measured where truncation, not round-off, dominates: dt = 4 ms
-/// against 2 ms (at 0.5 ms the error is ~2e-14·T0, the round-off floor of
-/// 20 000 steps, so the ratio there says nothing about the method).
+/// ideally). Measured where truncation, not round-off, dominates for any of
+/// the test models: dt = 4 ms against 2 ms.
 fn check_fourth_order(model: &Model, seed: u64) {
     let dt = 4e-3;
     let a = run(model, seed, dt, 10.0);
@@ -112,19 +120,41 @@ fn check_fourth_order(model: &Model, seed: u64) {
     );
 }
 
+/// A random floating tree with rotor armature on every joint (armature stores
+/// kinetic energy too, so it must be conserved with it).
 fn random_model() -> Model {
-    zero_gravity(common::model(
+    let mut m = zero_gravity(common::model(
         &common::random_tree(7, 10),
         BaseKind::Floating,
-    ))
+    ));
+    for iv in m.base_nv()..m.nv {
+        m.armature[iv] = 0.01;
+    }
+    m
+}
+
+/// The built-in quad16 (Study A's robot), floating.
+fn quad16() -> Model {
+    let d = quadsim_engine::robots::builtin("quad16").expect("built-in quad16");
+    zero_gravity(common::model(&d, BaseKind::Floating))
 }
 
 #[test]
 fn rk4_conserves_energy_and_momentum_on_random_tree() {
-    check_conservation(&random_model(), 11);
+    check_conservation(&random_model(), 11, false);
 }
 
 #[test]
 fn rk4_energy_error_is_fourth_order_on_random_tree() {
     check_fourth_order(&random_model(), 11);
+}
+
+#[test]
+fn rk4_conserves_energy_and_momentum_on_quad16() {
+    check_conservation(&quad16(), 12, true);
+}
+
+#[test]
+fn rk4_energy_error_is_fourth_order_on_quad16() {
+    check_fourth_order(&quad16(), 12);
 }
