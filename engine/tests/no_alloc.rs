@@ -178,3 +178,9 @@ fn hot_path_does_not_allocate_floating_random_tree() {
 fn hot_path_does_not_allocate_fixed_random_tree() {
     assert_no_allocation(&common::model(&common::random_tree(18, 6), BaseKind::Fixed));
 }
+
+#[test]
+fn hot_path_does_not_allocate_quad16() {
+    let d = quadsim_engine::robots::builtin("quad16").expect("built-in quad16");
+    assert_no_allocation(&common::model(&d, BaseKind::Floating));
+}
