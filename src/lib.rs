@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod model_source;
 pub mod scenario;
 pub mod urdf;
 
