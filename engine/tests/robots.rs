@@ -390,7 +390,14 @@ fn quad12_legs_follow_the_study_dh_kinematics() {
     let d = builtin("quad12").unwrap();
     let model = Model::from_description(&d, BaseKind::Fixed).unwrap();
     let mut data = Data::new(&model);
-    let psi = [0.7853981634, -0.7853981634, -2.35619449, 2.35619449];
+    // the leg yaws as the parameter table sets them (π/4, 3π/4 to the URDF's digits)
+    let yaw = |path: &str| {
+        let specs = params("quad12").unwrap();
+        specs.iter().find(|s| s.path == path).unwrap().default
+    };
+    let (front, hind) = (yaw("leg.front_yaw_rad"), yaw("leg.hind_yaw_rad"));
+    assert!((front - PI / 4.0).abs() < 1e-10 && (hind - 3.0 * PI / 4.0).abs() < 1e-9);
+    let psi = [front, -front, -hind, hind];
     let mounts = [
         (0.15, 0.075),
         (0.15, -0.075),

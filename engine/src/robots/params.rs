@@ -50,6 +50,25 @@ pub struct ParamSpec {
     pub domain: Domain,
 }
 
+impl ParamSpec {
+    /// A table entry.
+    pub const fn new(
+        path: &'static str,
+        default: f64,
+        unit: &'static str,
+        doc: &'static str,
+        domain: Domain,
+    ) -> ParamSpec {
+        ParamSpec {
+            path,
+            default,
+            unit,
+            doc,
+            domain,
+        }
+    }
+}
+
 /// A bad parameter override or an unknown robot.
 #[derive(Debug, Error, PartialEq)]
 pub enum ParamError {
@@ -177,6 +196,11 @@ impl Values {
     /// The value's default.
     pub(crate) fn default_of(&self, path: &str) -> f64 {
         self.specs[self.index(path)].default
+    }
+
+    /// The value relative to its default (the scale factor of a size).
+    pub(crate) fn ratio(&self, path: &str) -> f64 {
+        self.get(path) / self.default_of(path)
     }
 
     /// A mass that follows its part's size: the value when the user gave it,

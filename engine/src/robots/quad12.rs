@@ -79,6 +79,7 @@
 //! support; the speed limit, 6 rad/s (0.17 s per 60°), is the same class's
 //! speed at 6 V.
 
+use super::box_torso;
 use super::params::{Domain, ParamSpec, Values};
 use crate::description::{Geometry, JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
 use crate::spatial::{Transform, rot_from_rpy};
@@ -118,155 +119,139 @@ const SHANK_INERTIA: DVec3 = DVec3::new(3e-5, 4e-5, 5e-5);
 /// Radii (m) of the visual capsules of the hip, thigh and shank (the MJCF's).
 const VISUAL_RADII_M: [f64; 3] = [0.01, 0.01, 0.008];
 
-const fn spec(
-    path: &'static str,
-    default: f64,
-    unit: &'static str,
-    doc: &'static str,
-    domain: Domain,
-) -> ParamSpec {
-    ParamSpec {
-        path,
-        default,
-        unit,
-        doc,
-        domain,
-    }
-}
-
 /// The parameter table (see the module docs).
 #[expect(
     clippy::approx_constant,
     reason = "the URDF's printed digits of π/4, 3π/4 and its ±3.14159 joint range, kept so the built-in equals the URDF"
 )]
 pub const PARAMS: &[ParamSpec] = &[
-    spec(
+    ParamSpec::new(
         "torso.size_x_m",
         0.3,
         "m",
         "torso box length (x)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "torso.size_y_m",
         0.15,
         "m",
         "torso box width (y)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "torso.size_z_m",
         0.05,
         "m",
         "torso box height (z)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "torso.mass_kg",
         2.0,
         "kg",
         "torso mass (follows the box volume unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "mount.x_m",
         0.15,
         "m",
         "hip mount distance ahead of / behind the torso centre (study: a)",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "mount.y_m",
         0.075,
         "m",
         "hip mount distance left / right of the torso centre (study: b)",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "mount.z_m",
         0.0,
         "m",
         "hip mount height above the torso centre (study: c)",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "leg.front_yaw_rad",
         0.7853981634,
         "rad",
         "outward turn of the front legs (π/4 to the URDF's 10 digits)",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "leg.hind_yaw_rad",
         2.35619449,
         "rad",
         "outward turn of the hind legs (3π/4 to the URDF's 9 digits)",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "hip.length_m",
         0.05,
         "m",
         "l1: hip-yaw to hip-pitch offset, across the leg",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "hip.mass_kg",
         0.5,
         "kg",
         "hip link mass (follows l1 unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "thigh.length_m",
         0.1,
         "m",
         "l2: hip pitch to knee",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "thigh.mass_kg",
         1.2,
         "kg",
         "thigh mass (follows l2 unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "shank.length_m",
         0.08,
         "m",
         "l3: knee to foot",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "shank.mass_kg",
         0.8,
         "kg",
         "shank mass (follows l3 unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "foot.radius_m",
         0.01,
         "m",
         "radius of the massless foot pad (the MJCF's)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "joint.limit_rad",
         3.14159,
         "rad",
         "symmetric position limit of every joint (the URDF's)",
         Domain::Positive,
     ),
-    spec(
+    ParamSpec::new(
         "actuator.effort_limit_nm",
         3.0,
         "N·m",
         "torque limit of every joint (ASSUMPTION: high-torque hobby servo)",
         Domain::Positive,
     ),
-    spec(
+    ParamSpec::new(
         "actuator.velocity_limit_rad_s",
         6.0,
         "rad/s",
@@ -309,16 +294,6 @@ fn capsule_to(tip: DVec3, radius_m: f64) -> Geometry {
 
 /// Builds the description from resolved parameters.
 pub(crate) fn build(p: &Values) -> RobotDescription {
-    let ratio = |path: &str| p.get(path) / p.default_of(path);
-    let torso_size = DVec3::new(
-        p.get("torso.size_x_m"),
-        p.get("torso.size_y_m"),
-        p.get("torso.size_z_m"),
-    );
-    let torso_mass = p.mass_following(
-        "torso.mass_kg",
-        ratio("torso.size_x_m") * ratio("torso.size_y_m") * ratio("torso.size_z_m"),
-    );
     let mount = DVec3::new(p.get("mount.x_m"), p.get("mount.y_m"), p.get("mount.z_m"));
     let (front_yaw, hind_yaw) = (p.get("leg.front_yaw_rad"), p.get("leg.hind_yaw_rad"));
     let foot_r = p.get("foot.radius_m");
@@ -348,7 +323,7 @@ pub(crate) fn build(p: &Values) -> RobotDescription {
     let links: Vec<(f64, f64, DVec3, DMat3)> = parts
         .iter()
         .map(|&(lp, mp, i0, axis, dir)| {
-            let s = ratio(lp);
+            let s = p.ratio(lp);
             let mass = p.mass_following(mp, s);
             let length = p.get(lp);
             let inertia = stretched_inertia(i0, axis, s, mass / p.default_of(mp));
@@ -357,19 +332,7 @@ pub(crate) fn build(p: &Values) -> RobotDescription {
         .collect();
 
     let mut d = RobotDescription::new(NAME);
-    let torso_shape = Shape::Box { size_m: torso_size };
-    let torso_geom = Geometry {
-        origin: Transform::IDENTITY,
-        shape: torso_shape.clone(),
-    };
-    d.links.push(LinkDesc {
-        name: "torso".into(),
-        mass_kg: torso_mass,
-        com_m: DVec3::ZERO,
-        inertia_kgm2: torso_shape.solid_inertia(torso_mass),
-        collision: vec![torso_geom.clone()],
-        visual: vec![torso_geom],
-    });
+    d.links.push(box_torso(p));
     let joint = |name: String, kind: JointKind, parent: &str, child: &str, at: Transform| {
         let j = JointDesc::new(name, kind, parent, child, at);
         if matches!(kind, JointKind::Fixed) {

@@ -57,7 +57,8 @@
 //! leaves a margin above that.
 
 use super::params::{Domain, ParamSpec, Values};
-use crate::description::{Geometry, JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
+use super::{box_torso, solid_link};
+use crate::description::{JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
 use crate::spatial::Transform;
 use glam::{DMat3, DVec3};
 
@@ -78,148 +79,132 @@ pub const LEGS: [(&str, f64, f64); 4] = [
 /// behind the hip.
 pub const STANCE_LEG_RAD: [f64; 4] = [0.0, 0.3, -0.6, 0.3];
 
-const fn spec(
-    path: &'static str,
-    default: f64,
-    unit: &'static str,
-    doc: &'static str,
-    domain: Domain,
-) -> ParamSpec {
-    ParamSpec {
-        path,
-        default,
-        unit,
-        doc,
-        domain,
-    }
-}
-
 /// The parameter table (see the module docs).
 #[expect(
     clippy::approx_constant,
     reason = "the URDF's ±3.14159 joint range, kept so the built-in equals the URDF"
 )]
 pub const PARAMS: &[ParamSpec] = &[
-    spec(
+    ParamSpec::new(
         "torso.size_x_m",
         0.6,
         "m",
         "torso box length (x)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "torso.size_y_m",
         0.3,
         "m",
         "torso box width (y)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "torso.size_z_m",
         0.1,
         "m",
         "torso box height (z)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "torso.mass_kg",
         10.0,
         "kg",
         "torso mass (follows the box volume unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "mount.x_m",
         0.25,
         "m",
         "hip mount distance ahead of / behind the torso centre",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "mount.y_m",
         0.15,
         "m",
         "hip mount distance left / right of the torso centre",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "mount.z_m",
         0.0,
         "m",
         "hip mount height above the torso centre",
         Domain::Finite,
     ),
-    spec(
+    ParamSpec::new(
         "thigh.length_m",
         0.3,
         "m",
         "hip to knee; thigh cylinder length",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "thigh.radius_m",
         0.05,
         "m",
         "thigh cylinder radius",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "thigh.mass_kg",
         2.5,
         "kg",
         "thigh mass (follows the cylinder volume unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "shank.length_m",
         0.25,
         "m",
         "knee to ankle; shank cylinder length",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "shank.radius_m",
         0.04,
         "m",
         "shank cylinder radius",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "shank.mass_kg",
         1.5,
         "kg",
         "shank mass (follows the cylinder volume unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "foot.radius_m",
         0.03,
         "m",
         "foot sphere radius (centre one radius below the ankle)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "foot.mass_kg",
         0.5,
         "kg",
         "foot mass (follows the sphere volume unless given)",
         Domain::NonNegative,
     ),
-    spec(
+    ParamSpec::new(
         "joint.limit_rad",
         3.14159,
         "rad",
         "symmetric position limit of every joint (the URDF's)",
         Domain::Positive,
     ),
-    spec(
+    ParamSpec::new(
         "actuator.effort_limit_nm",
         100.0,
         "N·m",
         "torque limit of every joint (ASSUMPTION: the study gives none)",
         Domain::Positive,
     ),
-    spec(
+    ParamSpec::new(
         "actuator.velocity_limit_rad_s",
         30.0,
         "rad/s",
@@ -228,60 +213,27 @@ pub const PARAMS: &[ParamSpec] = &[
     ),
 ];
 
-/// A link with a given mass, CoM and inertia, and one shape used for both
-/// collision and display.
-fn solid_link(name: String, mass_kg: f64, shape: Shape, at: DVec3) -> LinkDesc {
-    let inertia = shape.solid_inertia(mass_kg).unwrap_or(DMat3::ZERO);
-    let geom = Geometry {
-        origin: Transform::from_translation(at),
-        shape,
-    };
-    LinkDesc {
-        name,
-        mass_kg,
-        com_m: at,
-        inertia_kgm2: Some(inertia),
-        collision: vec![geom.clone()],
-        visual: vec![geom],
-    }
-}
-
 /// Builds the description from resolved parameters.
 pub(crate) fn build(p: &Values) -> RobotDescription {
-    let ratio = |path: &str| p.get(path) / p.default_of(path);
-    let torso_size = DVec3::new(
-        p.get("torso.size_x_m"),
-        p.get("torso.size_y_m"),
-        p.get("torso.size_z_m"),
-    );
-    let torso_mass = p.mass_following(
-        "torso.mass_kg",
-        ratio("torso.size_x_m") * ratio("torso.size_y_m") * ratio("torso.size_z_m"),
-    );
     let (thigh_l, thigh_r) = (p.get("thigh.length_m"), p.get("thigh.radius_m"));
     let thigh_mass = p.mass_following(
         "thigh.mass_kg",
-        ratio("thigh.length_m") * ratio("thigh.radius_m").powi(2),
+        p.ratio("thigh.length_m") * p.ratio("thigh.radius_m").powi(2),
     );
     let (shank_l, shank_r) = (p.get("shank.length_m"), p.get("shank.radius_m"));
     let shank_mass = p.mass_following(
         "shank.mass_kg",
-        ratio("shank.length_m") * ratio("shank.radius_m").powi(2),
+        p.ratio("shank.length_m") * p.ratio("shank.radius_m").powi(2),
     );
     let foot_r = p.get("foot.radius_m");
-    let foot_mass = p.mass_following("foot.mass_kg", ratio("foot.radius_m").powi(3));
+    let foot_mass = p.mass_following("foot.mass_kg", p.ratio("foot.radius_m").powi(3));
     let mount = DVec3::new(p.get("mount.x_m"), p.get("mount.y_m"), p.get("mount.z_m"));
     let limit = p.get("joint.limit_rad");
     let effort = p.get("actuator.effort_limit_nm");
     let velocity = p.get("actuator.velocity_limit_rad_s");
 
     let mut d = RobotDescription::new(NAME);
-    d.links.push(solid_link(
-        "torso".into(),
-        torso_mass,
-        Shape::Box { size_m: torso_size },
-        DVec3::ZERO,
-    ));
+    d.links.push(box_torso(p));
     let joint = |name: String, axis: DVec3, parent: &str, child: &str, at: DVec3| JointDesc {
         limits: Some((-limit, limit)),
         effort_limit: effort,
