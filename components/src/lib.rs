@@ -1,1 +1,66 @@
+//! quadsim's ECS data: robots as entities and the world resources that hold
+//! their packed simulation state.
+//!
+//! A robot is a root entity ([`Robot`], [`RobotModelName`], [`RobotBase`]) with
+//! one entity per link ([`Link`], [`Mass`], [`CenterOfMass`], [`Inertia`], …)
+//! and per joint ([`Joint`], [`JointPlacement`], [`JointConnection`], limits
+//! and passive coefficients), each pointing back with [`BelongsTo`]. Collision
+//! and visual shapes are entities attached to their link ([`ColliderOf`],
+//! [`VisualOf`]). Components are small and say one thing (avian style); values
+//! the user sets ([`Inertia`]) are kept apart from derived ones ([`ComputedInertia`]).
+//!
+//! The entities are the *editable description*. The compile stage (in
+//! `quadsim-systems`) turns them into the engine's packed model when they
+//! change, never inside a step; the packed [`RobotBatch`] is the authoritative
+//! state, and [`LinkPose`] is only a copy of it for publishing.
+//!
+//! # Examples
+//! ```
+//! use bevy_ecs::prelude::*;
+//! use glam::DVec3;
+//! use quadsim_components::{Link, Mass, describe_robot, spawn_robot};
+//! use quadsim_engine::description::RobotBuilder;
+//!
+//! let desc = RobotBuilder::new("pendulum")
+//!     .link("base").mass(1.0).done()
+//!     .link("arm").mass(2.0).com(DVec3::new(0.0, 0.0, -0.5)).done()
+//!     .revolute("swing", "base", "arm", DVec3::ZERO, DVec3::Y)
+//!     .build();
+//! let mut world = World::new();
+//! let root = spawn_robot(&mut world, &desc);
+//! assert_eq!(describe_robot(&world, root).unwrap().total_mass_kg(), 3.0);
+//!
+//! // edit the arm's mass on its entity; the description follows
+//! let mut q = world.query::<(&Link, &mut Mass)>();
+//! for (link, mut mass) in q.iter_mut(&mut world) {
+//!     if link.name == "arm" {
+//!         mass.0 = 4.0;
+//!     }
+//! }
+//! assert_eq!(describe_robot(&world, root).unwrap().total_mass_kg(), 5.0);
+//! ```
 
+mod build;
+mod collider;
+mod joint;
+mod link;
+mod resources;
+mod robot;
+
+pub use build::{
+    CompileError, DescribeError, describe_robot, describe_robot_with_links, spawn_joint,
+    spawn_link, spawn_robot, spawn_robot_with_base,
+};
+pub use collider::{Collider, ColliderOf, LinkColliders, LinkVisuals, Visual, VisualOf};
+pub use joint::{
+    EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
+    JointMotion, JointPlacement, VelocityLimit,
+};
+pub use link::{CenterOfMass, ComputedInertia, Foot, FootPoint, Inertia, Link, LinkPose, Mass};
+pub use resources::{
+    ContactForces, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
+    ThreadPoolError,
+};
+pub use robot::{
+    BelongsTo, CompileFailure, Robot, RobotBase, RobotIndex, RobotModelName, RobotParts,
+};

@@ -1,1 +1,27 @@
+//! quadsim's bevy_ecs systems: the compile stage that turns robot entities into
+//! packed engine models, and the fixed-step schedule that advances them.
+//!
+//! Each [`Simulation::step`] runs two schedules:
+//!
+//! 1. [`CompileSchedule`]: robots whose description components changed are
+//!    recompiled (never inside a step);
+//! 2. [`StepSchedule`]: the [`SimSystems`] stages `Gait → Control → Contact →
+//!    Dynamics → Integrate → Publish`, with robots integrated in parallel on
+//!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool).
 
+mod compile;
+mod publish;
+mod schedule;
+mod simulation;
+mod step;
+
+pub use compile::{
+    CompileSchedule, DirtyRobots, build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
+};
+pub use publish::{pose_sync_due, sync_link_poses};
+pub use schedule::{
+    SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,
+    register_dynamics, register_gait, register_integrate, register_publish,
+};
+pub use simulation::Simulation;
+pub use step::{advance_clock, step_robot, step_robots};

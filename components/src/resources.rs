@@ -1,0 +1,199 @@
+//! World resources: the step settings, the clock, the thread pool and the
+//! packed per-robot simulation state.
+
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+use quadsim_engine::integrate::{ForceModel, Integrator, State, StepWorkspace};
+use quadsim_engine::model::STANDARD_GRAVITY;
+use quadsim_engine::passive::PassiveParams;
+use quadsim_engine::{Data, Model};
+use thiserror::Error;
+
+use crate::robot::RobotIndex;
+
+/// Settings of the fixed step, shared by every robot of the world.
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct SimConfig {
+    /// Step length (s).
+    pub dt_s: f64,
+    /// Integration scheme.
+    pub integrator: Integrator,
+    /// Gravity (m/s², world frame, z up); copied into each compiled model.
+    pub gravity: DVec3,
+    /// Passive joint model (damping, friction, soft limits, actuator saturation).
+    pub passive: PassiveParams,
+}
+
+impl Default for SimConfig {
+    /// 0.5 ms semi-implicit Euler steps under standard gravity, all passive effects on.
+    fn default() -> Self {
+        Self {
+            dt_s: 0.0005,
+            integrator: Integrator::default(),
+            gravity: STANDARD_GRAVITY,
+            passive: PassiveParams::default(),
+        }
+    }
+}
+
+/// Simulated time. `time_s = step × dt_s`, computed from the step count rather
+/// than accumulated, so it does not drift by round-off over long runs.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq)]
+pub struct SimClock {
+    /// Steps taken since the start.
+    pub step: u64,
+    /// Time at the end of the last step (s).
+    pub time_s: f64,
+}
+
+/// Error building the thread pool.
+#[derive(Debug, Error)]
+#[error("cannot build a simulation thread pool with {threads} threads: {source}")]
+pub struct ThreadPoolError {
+    /// Requested number of threads.
+    pub threads: usize,
+    /// rayon's error.
+    #[source]
+    pub source: rayon::ThreadPoolBuildError,
+}
+
+/// The one thread pool robots are stepped on, sized by the `threads` setting
+/// (the CLI's `--threads`). Owned by the world rather than global, so each
+/// world (and each test) can have its own size.
+#[derive(Resource, Debug)]
+pub struct SimThreadPool {
+    pool: rayon::ThreadPool,
+}
+
+impl SimThreadPool {
+    /// A pool of `threads` workers (0: one per core).
+    pub fn new(threads: usize) -> Result<Self, ThreadPoolError> {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("quadsim-sim-{i}"))
+            .build()
+            .map(|pool| Self { pool })
+            .map_err(|source| ThreadPoolError { threads, source })
+    }
+
+    /// Number of worker threads.
+    pub fn threads(&self) -> usize {
+        self.pool.current_num_threads()
+    }
+
+    /// Runs `f` inside the pool, so rayon's parallel iterators in it use these workers.
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        self.pool.install(f)
+    }
+}
+
+/// External forces on one robot during a step: the seam through which the
+/// contact model (a later issue) enters the integrator. It is a
+/// [`ForceModel`], so it is re-evaluated at every derivative evaluation (every
+/// RK4 stage). The `Contact` stage prepares it before the step; today it holds
+/// nothing and adds no force (zero-contact free fall).
+#[derive(Clone, Debug, Default)]
+pub struct ContactForces {}
+
+impl ForceModel for ContactForces {
+    #[inline]
+    fn apply(&mut self, _: &Model, _: &mut Data, _: &[f64], _: &[f64], _: &mut [f64]) {}
+}
+
+/// The packed, authoritative simulation state of one robot.
+#[derive(Debug)]
+pub struct RobotSim {
+    /// The robot's root entity.
+    pub entity: Entity,
+    /// The compiled articulation (shared, immutable; replaced on recompile).
+    pub model: Arc<Model>,
+    /// Kinematics/dynamics workspace; after a step it holds the last
+    /// derivative evaluation, not the new state.
+    pub data: Data,
+    /// Generalised position and velocity (Pinocchio conventions, nq and nv).
+    pub state: State,
+    /// Actuator torque command (N·m or N, nv; base entries normally zero),
+    /// written by the `Control` stage and saturated inside the step.
+    pub tau_actuator: Vec<f64>,
+    /// Integrator buffers and the passive joint model.
+    pub workspace: StepWorkspace,
+    /// Contact seam (see [`ContactForces`]).
+    pub contact: ContactForces,
+    /// Link entity of each frame of the model (frame `i` ↔ `link_entities[i]`).
+    pub link_entities: Vec<Entity>,
+    /// Debug counter: the pool worker (`rayon::current_thread_index`) that ran
+    /// this robot's last step, `None` before the first.
+    pub last_worker: Option<usize>,
+}
+
+impl RobotSim {
+    /// A robot at the model's neutral configuration, at rest, with no actuator torque.
+    pub fn new(
+        entity: Entity,
+        model: Arc<Model>,
+        link_entities: Vec<Entity>,
+        passive: PassiveParams,
+    ) -> Self {
+        let mut workspace = StepWorkspace::new(&model);
+        workspace.passive = passive;
+        Self {
+            entity,
+            data: Data::new(&model),
+            state: State::neutral(&model),
+            tau_actuator: vec![0.0; model.nv],
+            workspace,
+            contact: ContactForces::default(),
+            link_entities,
+            last_worker: None,
+            model,
+        }
+    }
+}
+
+/// Every compiled robot's simulation state, contiguous so the step can sweep
+/// them in parallel without locks. Indexed by [`RobotIndex`].
+#[derive(Resource, Debug, Default)]
+pub struct RobotBatch {
+    /// One entry per compiled robot.
+    pub sims: Vec<RobotSim>,
+}
+
+impl RobotBatch {
+    /// The robot in slot `index`.
+    pub fn get(&self, index: RobotIndex) -> Option<&RobotSim> {
+        self.sims.get(index.0)
+    }
+
+    /// The robot in slot `index`, mutably.
+    pub fn get_mut(&mut self, index: RobotIndex) -> Option<&mut RobotSim> {
+        self.sims.get_mut(index.0)
+    }
+}
+
+/// When link poses are copied back to the [`crate::LinkPose`] components.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PoseSync {
+    /// Copy after every `every_steps`-th step (0: only on request).
+    pub every_steps: u64,
+    /// Copy after the next step regardless of the rate; cleared when done.
+    pub requested: bool,
+}
+
+impl Default for PoseSync {
+    /// After every step.
+    fn default() -> Self {
+        Self {
+            every_steps: 1,
+            requested: false,
+        }
+    }
+}
+
+impl PoseSync {
+    /// True when poses are due after step number `step` (1-based, as in [`SimClock::step`]).
+    pub fn due(&self, step: u64) -> bool {
+        self.requested || (self.every_steps > 0 && step.is_multiple_of(self.every_steps))
+    }
+}

@@ -1,0 +1,244 @@
+//! The compile stage: robot entities → packed engine models, in its own
+//! schedule that runs before the step schedule, never inside a step.
+//!
+//! [`mark_dirty_robots`] finds robots whose description components changed
+//! (bevy change detection, plus removals); [`compile_dirty_robots`] reads their
+//! entities back with [`describe_robot_with_links`], compiles a
+//! [`Model`] and installs it in the [`RobotBatch`]. A robot that does not
+//! compile gets a [`CompileFailure`] and keeps its last valid model.
+
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
+use quadsim_components::{
+    BelongsTo, CenterOfMass, Collider, ColliderOf, CompileError, CompileFailure, ComputedInertia,
+    EffortLimit, Foot, FootPoint, Inertia, Joint, JointArmature, JointConnection, JointDamping,
+    JointFriction, JointLimits, JointPlacement, Link, LinkColliders, LinkVisuals, Mass, Robot,
+    RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim, SimConfig,
+    VelocityLimit, Visual, VisualOf, describe_robot_with_links,
+};
+use quadsim_engine::Model;
+
+/// Label of the schedule that compiles robots; [`crate::Simulation::step`]
+/// runs it before [`crate::StepSchedule`].
+#[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
+pub struct CompileSchedule;
+
+/// Robots waiting for the compile stage.
+#[derive(Resource, Debug, Default)]
+pub struct DirtyRobots {
+    /// Roots whose description changed (may repeat).
+    pub robots: Vec<Entity>,
+    /// A robot was despawned: drop its slot and renumber [`RobotIndex`].
+    pub prune: bool,
+}
+
+/// The compile schedule: [`mark_dirty_robots`] then [`compile_dirty_robots`],
+/// single-threaded, ambiguity detection as an error.
+pub fn build_compile_schedule() -> Schedule {
+    let mut schedule = Schedule::new(CompileSchedule);
+    schedule.set_build_settings(ScheduleBuildSettings {
+        ambiguity_detection: LogLevel::Error,
+        ..Default::default()
+    });
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.add_systems((mark_dirty_robots, compile_dirty_robots).chain());
+    schedule
+}
+
+/// Components of a robot root whose change triggers a recompile.
+type RootChanged = Or<(
+    Changed<Robot>,
+    Changed<RobotModelName>,
+    Changed<RobotBase>,
+    Changed<RobotParts>,
+)>;
+
+/// Components of a link entity whose change triggers a recompile.
+type LinkChanged = Or<(
+    Changed<Link>,
+    Changed<Mass>,
+    Changed<CenterOfMass>,
+    Changed<Inertia>,
+    Changed<Foot>,
+    Changed<FootPoint>,
+    Changed<LinkColliders>,
+    Changed<LinkVisuals>,
+)>;
+
+/// Components of a joint entity whose change triggers a recompile.
+type JointChanged = Or<(
+    Changed<Joint>,
+    Changed<JointPlacement>,
+    Changed<JointConnection>,
+    Changed<JointLimits>,
+    Changed<EffortLimit>,
+    Changed<VelocityLimit>,
+    Changed<JointDamping>,
+    Changed<JointFriction>,
+    Changed<JointArmature>,
+)>;
+
+/// A collider or visual entity whose shape changed, with the link it belongs to.
+type ShapeChanged<'w, 's> = Query<
+    'w,
+    's,
+    (Option<&'static ColliderOf>, Option<&'static VisualOf>),
+    Or<(Changed<Collider>, Changed<Visual>)>,
+>;
+
+/// Optional description components whose removal changes the description.
+type Removals<'w, 's> = (
+    RemovedComponents<'w, 's, Inertia>,
+    RemovedComponents<'w, 's, JointLimits>,
+    RemovedComponents<'w, 's, Foot>,
+    RemovedComponents<'w, 's, FootPoint>,
+    RemovedComponents<'w, 's, Link>,
+    RemovedComponents<'w, 's, Joint>,
+);
+
+/// Collects the robots whose description changed since the last run. A
+/// changed [`SimConfig`] (gravity, passive model) marks every robot.
+pub fn mark_dirty_robots(
+    mut dirty: ResMut<DirtyRobots>,
+    config: Res<SimConfig>,
+    all_roots: Query<Entity, With<Robot>>,
+    roots: Query<Entity, (With<Robot>, RootChanged)>,
+    parts: Query<&BelongsTo, Or<(LinkChanged, JointChanged)>>,
+    shapes: ShapeChanged,
+    owners: Query<&BelongsTo>,
+    mut removed: Removals,
+    mut removed_robots: RemovedComponents<Robot>,
+) {
+    if config.is_changed() {
+        dirty.robots.extend(all_roots.iter());
+    }
+    dirty.robots.extend(roots.iter());
+    dirty.robots.extend(parts.iter().map(|b| b.0));
+    for (collider_of, visual_of) in &shapes {
+        let link = collider_of.map(|c| c.0).or(visual_of.map(|v| v.0));
+        if let Some(owner) = link.and_then(|l| owners.get(l).ok()) {
+            dirty.robots.push(owner.0);
+        }
+    }
+    let (r0, r1, r2, r3, r4, r5) = &mut removed;
+    let removed_entities = r0
+        .read()
+        .chain(r1.read())
+        .chain(r2.read())
+        .chain(r3.read())
+        .chain(r4.read())
+        .chain(r5.read());
+    for e in removed_entities {
+        // A despawned entity has no owner any more; its robot's RobotParts changed instead.
+        if let Ok(owner) = owners.get(e) {
+            dirty.robots.push(owner.0);
+        }
+    }
+    if removed_robots.read().next().is_some() {
+        dirty.prune = true;
+    }
+}
+
+/// Compiles every robot marked by [`mark_dirty_robots`] (exclusive: it reads
+/// whole robots and writes the batch).
+///
+/// A recompiled robot keeps its state `(q, v)` and actuator command when nq and
+/// nv are unchanged; otherwise it restarts at the neutral configuration, at rest.
+pub fn compile_dirty_robots(world: &mut World) {
+    {
+        let dirty = world.resource::<DirtyRobots>();
+        if dirty.robots.is_empty() && !dirty.prune {
+            return;
+        }
+    }
+    let (mut robots, prune) = {
+        let mut dirty = world.resource_mut::<DirtyRobots>();
+        (
+            std::mem::take(&mut dirty.robots),
+            std::mem::take(&mut dirty.prune),
+        )
+    };
+    robots.sort_unstable();
+    robots.dedup();
+    let config = *world.resource::<SimConfig>();
+    world.resource_scope(|world, mut batch: Mut<RobotBatch>| {
+        if prune {
+            prune_despawned(world, &mut batch);
+        }
+        for &root in &robots {
+            compile_robot(world, &mut batch, root, &config);
+        }
+    });
+    robots.clear();
+    world.resource_mut::<DirtyRobots>().robots = robots;
+}
+
+/// Drops the slots of despawned robots and renumbers the others' [`RobotIndex`].
+fn prune_despawned(world: &mut World, batch: &mut RobotBatch) {
+    let before = batch.sims.len();
+    batch
+        .sims
+        .retain(|s| world.get::<Robot>(s.entity).is_some());
+    if batch.sims.len() != before {
+        for (i, sim) in batch.sims.iter().enumerate() {
+            world.entity_mut(sim.entity).insert(RobotIndex(i));
+        }
+    }
+}
+
+/// Compiles one robot and installs it in the batch, or records why it failed.
+fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config: &SimConfig) {
+    let Some(robot) = world.get::<Robot>(root) else {
+        return; // despawned since it was marked
+    };
+    let robot_name = robot.name.clone();
+    let base = world.get::<RobotBase>(root).copied().unwrap_or_default().0;
+    let compiled = describe_robot_with_links(world, root)
+        .map_err(CompileError::from)
+        .and_then(|(desc, links)| {
+            Model::from_description(&desc, base)
+                .map(|model| (desc, links, model))
+                .map_err(|source| CompileError::Model {
+                    robot: robot_name,
+                    source,
+                })
+        });
+    let (desc, links, mut model) = match compiled {
+        Ok(c) => c,
+        Err(e) => {
+            world.entity_mut(root).insert(CompileFailure(e));
+            return;
+        }
+    };
+    model.gravity = config.gravity;
+    for (link, &e) in desc.links.iter().zip(&links) {
+        if let Some(mut c) = world.get_mut::<ComputedInertia>(e) {
+            c.0 = link.rigid_inertia().inertia_com;
+        }
+    }
+    world.entity_mut(root).remove::<CompileFailure>();
+    let mut sim = RobotSim::new(root, Arc::new(model), links, config.passive);
+    let slot = world
+        .get::<RobotIndex>(root)
+        .map(|i| i.0)
+        .filter(|&i| batch.sims.get(i).is_some_and(|s| s.entity == root));
+    match slot {
+        Some(i) => {
+            let old = &mut batch.sims[i];
+            if old.model.nq == sim.model.nq && old.model.nv == sim.model.nv {
+                std::mem::swap(&mut sim.state, &mut old.state);
+                std::mem::swap(&mut sim.tau_actuator, &mut old.tau_actuator);
+            }
+            sim.last_worker = old.last_worker;
+            *old = sim;
+        }
+        None => {
+            batch.sims.push(sim);
+            world
+                .entity_mut(root)
+                .insert(RobotIndex(batch.sims.len() - 1));
+        }
+    }
+}

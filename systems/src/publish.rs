@@ -1,0 +1,39 @@
+//! Publishing: copying the packed state back to link entities.
+
+use bevy_ecs::prelude::*;
+use quadsim_components::{LinkPose, PoseSync, RobotBatch, SimClock, SimThreadPool};
+use quadsim_engine::kinematics::{forward_kinematics_pos, frame_pose};
+use rayon::prelude::*;
+
+/// Run condition: poses are due after this step (rate or request, see [`PoseSync`]).
+pub fn pose_sync_due(clock: Res<SimClock>, sync: Res<PoseSync>) -> bool {
+    sync.due(clock.step)
+}
+
+/// Writes every link's world pose at the current state into its [`LinkPose`].
+///
+/// Kinematics run per robot in parallel (the integrator leaves `data` at its
+/// last derivative evaluation, not at the new state); afterwards each robot's
+/// `data` holds the kinematics of its current `q`. Clears a pending request.
+pub fn sync_link_poses(
+    mut batch: ResMut<RobotBatch>,
+    pool: Res<SimThreadPool>,
+    mut sync: ResMut<PoseSync>,
+    mut poses: Query<&mut LinkPose>,
+) {
+    let sims = &mut batch.sims;
+    pool.install(|| {
+        sims.par_iter_mut()
+            .for_each(|s| forward_kinematics_pos(&s.model, &mut s.data, &s.state.q));
+    });
+    for sim in sims.iter() {
+        for (frame, &link) in sim.link_entities.iter().enumerate() {
+            if let Ok(mut pose) = poses.get_mut(link) {
+                pose.0 = frame_pose(&sim.model, &sim.data, frame);
+            }
+        }
+    }
+    if sync.requested {
+        sync.requested = false;
+    }
+}

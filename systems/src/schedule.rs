@@ -1,0 +1,130 @@
+//! The fixed-step schedule: six named stages, chained in an explicit order.
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
+
+use crate::publish::{pose_sync_due, sync_link_poses};
+use crate::step::{advance_clock, step_robots};
+
+/// Label of the schedule that advances the world by one fixed step.
+#[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
+pub struct StepSchedule;
+
+/// The stages of one fixed step, run in this order (each set exists even
+/// while empty, as a hook for later systems):
+///
+/// 1. [`Gait`](SimSystems::Gait): responsible for the gait clock and phase:
+///    which feet are in stance or swing, and the swing-foot and body targets.
+/// 2. [`Control`](SimSystems::Control): responsible for the actuator command:
+///    controllers (VMC, joint PD) read the state and write each robot's
+///    `tau_actuator` (N·m, nv).
+/// 3. [`Contact`](SimSystems::Contact): responsible for preparing contacts:
+///    ground queries and contact parameters put into each robot's
+///    [`ContactForces`](quadsim_components::ContactForces), the force model
+///    the integrator evaluates.
+/// 4. [`Dynamics`](SimSystems::Dynamics): responsible for anything the
+///    dynamics need fixed over the step before integrating. Forward dynamics
+///    itself (passive torques, saturated actuator torques, contact forces, ABA)
+///    runs *inside* the integrator, once per derivative evaluation, because
+///    RK4 needs it at every stage; so this set is empty today.
+/// 5. [`Integrate`](SimSystems::Integrate): responsible for advancing every
+///    robot's `(q, v)` by one `dt` with the engine's integrator, robots in
+///    parallel on the [`SimThreadPool`](quadsim_components::SimThreadPool), then
+///    the [`SimClock`](quadsim_components::SimClock).
+/// 6. [`Publish`](SimSystems::Publish): responsible for publishing and logging:
+///    copying link poses back to [`LinkPose`](quadsim_components::LinkPose)
+///    at the [`PoseSync`](quadsim_components::PoseSync) rate, and (later)
+///    streaming and logging.
+#[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SimSystems {
+    /// Gait clock and phase.
+    Gait,
+    /// Actuator commands.
+    Control,
+    /// Contact preparation.
+    Contact,
+    /// Step-constant dynamics inputs.
+    Dynamics,
+    /// Time integration and the clock.
+    Integrate,
+    /// Publishing and logging.
+    Publish,
+}
+
+impl SimSystems {
+    /// All stages in run order.
+    pub const ALL: [SimSystems; 6] = [
+        SimSystems::Gait,
+        SimSystems::Control,
+        SimSystems::Contact,
+        SimSystems::Dynamics,
+        SimSystems::Integrate,
+        SimSystems::Publish,
+    ];
+}
+
+/// The step schedule: the six [`SimSystems`] chained, the built-in systems
+/// registered, ambiguity detection as an error (every data conflict must be
+/// ordered on purpose).
+///
+/// It runs on bevy's single-threaded executor: the stages are strictly
+/// sequential anyway, and the parallelism is across robots inside
+/// [`step_robots`], on the world's own thread pool (bevy's global task pool can
+/// only be sized once per process).
+pub fn build_step_schedule() -> Schedule {
+    let mut schedule = Schedule::new(StepSchedule);
+    schedule.set_build_settings(ScheduleBuildSettings {
+        ambiguity_detection: LogLevel::Error,
+        ..Default::default()
+    });
+    schedule.set_executor(SingleThreadedExecutor::new());
+    schedule.configure_sets(
+        (
+            SimSystems::Gait,
+            SimSystems::Control,
+            SimSystems::Contact,
+            SimSystems::Dynamics,
+            SimSystems::Integrate,
+            SimSystems::Publish,
+        )
+            .chain(),
+    );
+    register_gait(&mut schedule);
+    register_control(&mut schedule);
+    register_contact(&mut schedule);
+    register_dynamics(&mut schedule);
+    register_integrate(&mut schedule);
+    register_publish(&mut schedule);
+    schedule
+}
+
+/// Registers the gait systems (none yet: the gait planner comes in a later issue).
+pub fn register_gait(_schedule: &mut Schedule) {}
+
+/// Registers the control systems (none yet: controllers come in a later issue).
+pub fn register_control(_schedule: &mut Schedule) {}
+
+/// Registers the contact systems (none yet: the ground model comes in a later
+/// issue, through [`ContactForces`](quadsim_components::ContactForces)).
+pub fn register_contact(_schedule: &mut Schedule) {}
+
+/// Registers the dynamics systems (none: see [`SimSystems::Dynamics`]).
+pub fn register_dynamics(_schedule: &mut Schedule) {}
+
+/// Registers [`step_robots`] then [`advance_clock`].
+pub fn register_integrate(schedule: &mut Schedule) {
+    schedule.add_systems(
+        (step_robots, advance_clock)
+            .chain()
+            .in_set(SimSystems::Integrate),
+    );
+}
+
+/// Registers [`sync_link_poses`], gated by [`pose_sync_due`].
+pub fn register_publish(schedule: &mut Schedule) {
+    schedule.add_systems(
+        sync_link_poses
+            .run_if(pose_sync_due)
+            .in_set(SimSystems::Publish),
+    );
+}

@@ -1,0 +1,56 @@
+//! Time integration of every robot, in parallel, and the clock.
+
+use bevy_ecs::prelude::*;
+use quadsim_components::{RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool};
+use quadsim_engine::integrate::{self, Integrator};
+use rayon::prelude::*;
+
+/// Advances every compiled robot by one `dt` on the world's thread pool.
+///
+/// Robots are independent, so each is stepped start to finish by one worker
+/// with its own model, data and workspace: no lock, no allocation, and the
+/// result does not depend on the number of threads.
+pub fn step_robots(
+    mut batch: ResMut<RobotBatch>,
+    pool: Res<SimThreadPool>,
+    config: Res<SimConfig>,
+) {
+    let (dt_s, integrator) = (config.dt_s, config.integrator);
+    let sims = &mut batch.sims;
+    pool.install(|| {
+        sims.par_iter_mut()
+            .for_each(|sim| step_robot(sim, dt_s, integrator));
+    });
+}
+
+/// One robot's step: the engine's integrator with the robot's actuator command
+/// and its contact force model; records the worker that ran it.
+pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
+    let RobotSim {
+        model,
+        data,
+        state,
+        tau_actuator,
+        workspace,
+        contact,
+        last_worker,
+        ..
+    } = sim;
+    integrate::step(
+        model,
+        data,
+        workspace,
+        state,
+        tau_actuator,
+        dt_s,
+        integrator,
+        contact,
+    );
+    *last_worker = rayon::current_thread_index();
+}
+
+/// Counts the step and sets `time_s = step × dt_s`.
+pub fn advance_clock(mut clock: ResMut<SimClock>, config: Res<SimConfig>) {
+    clock.step += 1;
+    clock.time_s = clock.step as f64 * config.dt_s;
+}
