@@ -484,10 +484,10 @@ fn validate(desc: &RobotDescription) -> Result<(), ModelError> {
                 return Err(bad(&j.name, "axis", n, "must be a non-zero finite vector"));
             }
         }
-        if let Some((lo, hi)) = j.limits {
-            if lo.is_nan() || hi.is_nan() || lo > hi {
-                return Err(bad(&j.name, "limit", hi - lo, "lower must be ≤ upper"));
-            }
+        if let Some((lo, hi)) = j.limits
+            && (lo.is_nan() || hi.is_nan() || lo > hi)
+        {
+            return Err(bad(&j.name, "limit", hi - lo, "lower must be ≤ upper"));
         }
         for (field, v) in [
             ("effort", j.effort_limit),
