@@ -179,6 +179,27 @@ fn describe_inverts_spawn_on_random_trees() {
 }
 
 #[test]
+fn describe_inverts_spawn_on_builtin_robots() {
+    let mut world = World::new();
+    for name in quadsim_engine::robots::builtin_names() {
+        let d = quadsim_engine::robots::builtin(name).unwrap();
+        let root = spawn_robot(&mut world, &d);
+        assert_eq!(
+            describe_robot(&world, root).unwrap(),
+            normalised(&d),
+            "{name}"
+        );
+        // every foot link carries the Foot marker
+        let feet = world
+            .query_filtered::<&BelongsTo, With<Foot>>()
+            .iter(&world)
+            .filter(|b| b.0 == root)
+            .count();
+        assert_eq!(feet, d.foot_names().len(), "{name}");
+    }
+}
+
+#[test]
 fn edited_components_change_the_description() {
     let d = rich_description();
     let mut world = World::new();

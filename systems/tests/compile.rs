@@ -64,10 +64,13 @@ fn holding_force_n(model: &Model) -> f64 {
 #[test]
 fn spawned_robot_compiles_to_the_description_model() {
     let mut sim = Simulation::new(SimConfig::default(), 1).unwrap();
+    let quad16 = quadsim_engine::robots::builtin("quad16").unwrap();
+    let quad12 = quadsim_engine::robots::builtin("quad12").unwrap();
     for (seed, desc) in [
         (0, pendulum()),
         (1, common::random_tree(7, 9)),
-        (2, common::random_tree(8, 3)),
+        (2, quad16),
+        (3, quad12),
     ] {
         let root = sim.spawn_robot(&desc).unwrap();
         let direct = Model::from_description(&desc, BaseKind::Floating).unwrap();
@@ -76,6 +79,7 @@ fn spawned_robot_compiles_to_the_description_model() {
             (model.nq, model.nv, model.nbodies),
             (direct.nq, direct.nv, direct.nbodies)
         );
+        assert_eq!(model.nv, 6 + desc.dof());
         assert_eq!(model.total_mass, desc.total_mass_kg());
         assert_eq!(model.inertia, direct.inertia, "robot {seed}");
         assert_eq!(sim.world.get::<RobotIndex>(root), Some(&RobotIndex(seed)));

@@ -72,3 +72,44 @@ fn free_fall_follows_the_configured_gravity() {
         );
     }
 }
+
+/// On the built-in robots with every passive effect on (damping, friction,
+/// soft limits: all internal forces), the CoM still follows the parabola and
+/// the momentum about it is still conserved.
+#[test]
+fn builtin_robots_fall_with_internal_forces() {
+    let config = SimConfig {
+        integrator: Integrator::Rk4,
+        ..SimConfig::default()
+    };
+    let gravity = config.gravity;
+    let mut sim = Simulation::new(config, 2).unwrap();
+    let mut robots = Vec::new();
+    for (k, name) in ["quad16", "quad12"].into_iter().enumerate() {
+        let desc = quadsim_engine::robots::builtin(name).unwrap();
+        let root = sim.spawn_robot(&desc).unwrap();
+        let r = sim.robot_mut(root).unwrap();
+        let (mut q, v) = common::random_state(&r.model, 40 + k as u64, 2.0, 0.5);
+        // inside the joint range, where the stance and gait keep the robot
+        let m = &r.model;
+        for b in 1..m.nbodies {
+            let iv = m.idx_v[b];
+            q[m.idx_q[b]] = q[m.idx_q[b]].clamp(m.lower_limit[iv], m.upper_limit[iv]);
+        }
+        r.state = State { q, v };
+        let start = invariants(&r.model, &r.state);
+        robots.push((root, start));
+    }
+    sim.run(400);
+    let t = sim.clock().time_s;
+    for (root, (c0, vc0, l0, _)) in robots {
+        let s = sim.robot(root).unwrap();
+        let (c, vc, l, _) = invariants(&s.model, &s.state);
+        assert!((c - (c0 + vc0 * t + gravity * (0.5 * t * t))).length() < 1e-9);
+        assert!((vc - (vc0 + gravity * t)).length() < 1e-9);
+        assert!(
+            (l - l0).length() < 1e-6 * (1.0 + l0.length()),
+            "{l} vs {l0}"
+        );
+    }
+}
