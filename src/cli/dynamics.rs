@@ -86,7 +86,8 @@ pub struct FramePose {
     pub translation: [f64; 3],
     /// Rotation taking link-frame vectors into the world, row-major.
     pub rotation: [[f64; 3]; 3],
-    /// The same rotation as a unit quaternion (x, y, z, w); its sign is arbitrary.
+    /// The same rotation as a unit quaternion (x, y, z, w), with the sign Eigen
+    /// (and so Pinocchio) picks; see [`quat_xyzw`].
     pub quat_xyzw: [f64; 4],
 }
 
@@ -311,7 +312,7 @@ pub fn evaluate(model: &Model, data: &mut Data, s: &State) -> Result<StateResult
             let pose = FramePose {
                 translation: x.trans.to_array(),
                 rotation: rows(x.rot),
-                quat_xyzw: x.quat().to_array(),
+                quat_xyzw: quat_xyzw(x.rot),
             };
             (model.frames[fi].name.clone(), pose)
         })
@@ -351,6 +352,29 @@ pub fn evaluate(model: &Model, data: &mut Data, s: &State) -> Result<StateResult
         joints,
         rnea_residual,
     })
+}
+
+/// The unit quaternion (x, y, z, w) of a rotation, with Eigen's sign: `q` and
+/// `−q` are the same rotation, and Eigen's matrix-to-quaternion conversion
+/// (which Pinocchio's output uses) makes `w` positive when the trace is
+/// positive, else the component of the largest diagonal entry. That component
+/// is at least ½ in size, so the choice is robust to rounding.
+pub fn quat_xyzw(rot: glam::DMat3) -> [f64; 4] {
+    let q = glam::DQuat::from_mat3(&rot).normalize().to_array();
+    let d = [rot.x_axis.x, rot.y_axis.y, rot.z_axis.z];
+    let pivot = if d[0] + d[1] + d[2] > 0.0 {
+        3
+    } else {
+        let mut i = 0;
+        if d[1] > d[0] {
+            i = 1;
+        }
+        if d[2] > d[i] {
+            i = 2;
+        }
+        i
+    };
+    if q[pivot] < 0.0 { q.map(|x| -x) } else { q }
 }
 
 fn vec_arr(v: DVec3) -> [f64; 3] {
