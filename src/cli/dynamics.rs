@@ -27,7 +27,6 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
-use glam::DVec3;
 use quadsim_engine::model::{BaseKind, Model};
 use quadsim_engine::{Data, aba, com, crba, energy, kinematics, nle, rnea};
 use serde::{Deserialize, Serialize};
@@ -259,7 +258,7 @@ pub fn check_state(model: &Model, s: &State) -> Result<(), StateError> {
         }
     }
     if model.is_floating() {
-        let norm = s.q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = base_quat_norm(&s.q);
         if (norm - 1.0).abs() > QUAT_NORM_TOL {
             return Err(err(
                 "q[3..7]".to_string(),
@@ -273,6 +272,11 @@ pub fn check_state(model: &Model, s: &State) -> Result<(), StateError> {
     Ok(())
 }
 
+/// Norm of a floating base's quaternion `q[3..7]`.
+fn base_quat_norm(q: &[f64]) -> f64 {
+    q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
 /// Evaluates every quantity of [`StateResult`] for one state. This is the
 /// function the CLI runs and the Pinocchio agreement test checks.
 ///
@@ -282,7 +286,7 @@ pub fn evaluate(model: &Model, data: &mut Data, s: &State) -> Result<StateResult
     check_state(model, s)?;
     let mut q = s.q.clone();
     if model.is_floating() {
-        let norm = q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt();
+        let norm = base_quat_norm(&q);
         q[3..7].iter_mut().for_each(|x| *x /= norm);
     }
     let (v, tau) = (&s.v, &s.tau);
@@ -345,7 +349,7 @@ pub fn evaluate(model: &Model, data: &mut Data, s: &State) -> Result<StateResult
         crba: crba_rows,
         nle: nle_v,
         gravity: grav,
-        com: vec_arr(c),
+        com: c.to_array(),
         kinetic_energy: ke,
         potential_energy: pe,
         frames,
@@ -375,10 +379,6 @@ pub fn quat_xyzw(rot: glam::DMat3) -> [f64; 4] {
         i
     };
     if q[pivot] < 0.0 { q.map(|x| -x) } else { q }
-}
-
-fn vec_arr(v: DVec3) -> [f64; 3] {
-    v.to_array()
 }
 
 /// Reads the states of a states file: a list of states, `{"states": [...]}`,
