@@ -5,7 +5,7 @@
 use crate::data::Data;
 use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
-use crate::spatial::{Force, Motion};
+use crate::spatial::{Force, Motion, outer};
 use glam::DVec3;
 
 /// Forward dynamics without external forces. Fills and returns `data.ddq` (nv).
@@ -41,23 +41,30 @@ pub fn aba_from_kinematics(
             data.c[i] = vi.cross(data.s[i] * v[model.idx_v[i]]);
         }
     }
-    // Pass 2: articulated inertias, leaves to root.
+    // Pass 2: articulated inertias, leaves to root. The downdated inertia
+    // Iᴬ − U Uᵀ/D is added to the parent block by block, never stored whole
+    // (a 6×6 does not fit the registers), and Iᴬ_a c = Iᴬ c − U (Uᵀc)/D.
     for i in (1..model.nbodies).rev() {
         let iv = model.idx_v[i];
+        let p = model.parent[i];
         let s = data.s[i];
-        let ia = data.ia[i];
+        let c = data.c[i];
+        let (head, tail) = data.ia.split_at_mut(i);
+        let ia = &tail[0];
         let u = ia.mul_motion(s);
-        let d = s.dot(u) + model.armature[iv];
-        let d_inv = 1.0 / d;
+        let d_inv = 1.0 / (s.dot(u) + model.armature[iv]);
         let ut = tau[iv] - s.dot(data.pa[i]);
+        let ia_c = ia.mul_motion(c);
+        let ul = u.lin * d_inv;
+        let ua = u.ang * d_inv;
+        let parent = &mut head[p];
+        parent.m += ia.m - outer(ul, u.lin);
+        parent.h += ia.h - outer(ua, u.lin);
+        parent.i += ia.i - outer(ua, u.ang);
+        let pa = data.pa[i] + ia_c + u * ((ut - c.dot(u)) * d_inv);
         data.u[i] = u;
         data.d_inv[i] = d_inv;
         data.u_tau[i] = ut;
-        let mut ia_a = ia;
-        ia_a.sub_outer(u, d_inv);
-        let pa = data.pa[i] + ia_a.mul_motion(data.c[i]) + u * (ut * d_inv);
-        let p = model.parent[i];
-        data.ia[p] += ia_a;
         data.pa[p] += pa;
     }
     // Pass 3: accelerations, root to leaves. Gravity is a fictitious upward

@@ -412,11 +412,24 @@ impl RigidInertia {
     }
 
     /// The same body seen from the parent frame of `x` (`x` maps this frame into it).
+    #[inline]
     pub fn transformed(&self, x: &Transform) -> RigidInertia {
+        // R I Rᵀ is symmetric: form At = I Rᵀ = (R I)ᵀ, then only the six
+        // distinct entries (R I Rᵀ)ⱼₖ = colⱼ(At) · colₖ(Rᵀ).
+        let rt = x.rot.transpose();
+        let at = self.inertia_com * rt;
+        let (a0, a1, a2) = (at.x_axis, at.y_axis, at.z_axis);
+        let (r0, r1, r2) = (rt.x_axis, rt.y_axis, rt.z_axis);
+        let (xx, yy, zz) = (a0.dot(r0), a1.dot(r1), a2.dot(r2));
+        let (xy, xz, yz) = (a0.dot(r1), a0.dot(r2), a1.dot(r2));
         RigidInertia {
             mass: self.mass,
             com: x.transform_point(self.com),
-            inertia_com: x.rot * self.inertia_com * x.rot.transpose(),
+            inertia_com: DMat3::from_cols(
+                DVec3::new(xx, xy, xz),
+                DVec3::new(xy, yy, yz),
+                DVec3::new(xz, yz, zz),
+            ),
         }
     }
 
@@ -440,12 +453,15 @@ impl RigidInertia {
     }
 
     /// The 6×6 spatial inertia about the frame origin.
+    #[inline]
     pub fn to_sym6(&self) -> Sym6 {
-        let cx = skew(self.com);
+        // i = I_c − m [c]×[c]× = I_c + m (|c|² 1 − c cᵀ), without a 3×3 product.
+        let c = self.com;
+        let mc = c * self.mass;
         Sym6 {
             m: DMat3::from_diagonal(DVec3::splat(self.mass)),
-            h: cx * self.mass,
-            i: self.inertia_com - cx * cx * self.mass,
+            h: skew(mc),
+            i: self.inertia_com + DMat3::from_diagonal(DVec3::splat(mc.dot(c))) - outer(mc, c),
         }
     }
 
@@ -496,8 +512,14 @@ impl Sym6 {
     /// `I · v`.
     #[inline]
     pub fn mul_motion(&self, v: Motion) -> Force {
+        // hᵀ ω as three column dot products, without forming hᵀ.
+        let ht_w = DVec3::new(
+            self.h.x_axis.dot(v.ang),
+            self.h.y_axis.dot(v.ang),
+            self.h.z_axis.dot(v.ang),
+        );
         Force {
-            lin: self.m * v.lin + self.h.transpose() * v.ang,
+            lin: self.m * v.lin + ht_w,
             ang: self.h * v.lin + self.i * v.ang,
         }
     }
@@ -530,13 +552,33 @@ impl Sym6 {
     /// Solves `self · a = f` for `a` (the matrix must be positive definite).
     /// Returns `None` when it is not.
     pub fn solve(&self, f: Force) -> Option<Motion> {
-        let mut a = self.to_dense();
-        let mut b = f.to_array();
-        if !crate::linalg::cholesky_in_place(&mut a) {
-            return None;
-        }
-        crate::linalg::cholesky_solve_in_place(&a, &mut b);
-        Some(Motion::from_slice(&b))
+        // Block elimination through the Schur complement of `m`:
+        //   S = i − h m⁻¹ hᵀ,  ω = S⁻¹ (n − h m⁻¹ f),  v = m⁻¹ (f − hᵀ ω).
+        // The matrix is positive definite iff `m` and `S` are (Sylvester's
+        // criterion on each). Two 3×3 inverses and no square roots: a much
+        // shorter dependency chain than a 6×6 Cholesky, on the path of every
+        // floating-base ABA call.
+        let m_inv = spd_inverse(self.m)?;
+        let b = self.h * m_inv;
+        let schur = self.i - b * self.h.transpose();
+        let s_inv = spd_inverse(schur)?;
+        let ang = s_inv * (f.ang - b * f.lin);
+        let lin = m_inv * (f.lin - self.h.transpose() * ang);
+        Some(Motion::new(lin, ang))
+    }
+}
+
+/// Inverse of a symmetric 3×3 matrix, `None` unless it is positive definite
+/// (all leading principal minors positive and finite).
+#[inline]
+fn spd_inverse(a: DMat3) -> Option<DMat3> {
+    let m1 = a.x_axis.x;
+    let m2 = a.x_axis.x * a.y_axis.y - a.x_axis.y * a.y_axis.x;
+    let det = a.determinant();
+    if m1 > 0.0 && m2 > 0.0 && det > 0.0 && det.is_finite() {
+        Some(a.inverse())
+    } else {
+        None
     }
 }
 
@@ -617,6 +659,19 @@ mod tests {
         let s = a.mul_motion(v) + b.mul_motion(v);
         let c = a.combined(&b).mul_motion(v);
         assert!(approx(s.lin, c.lin) && approx(s.ang, c.ang));
+    }
+
+    #[test]
+    fn sym6_solve_rejects_indefinite() {
+        // a rigid inertia with a negative principal moment is not positive definite
+        let ri = RigidInertia::new(
+            2.0,
+            DVec3::new(0.1, -0.2, 0.3),
+            DMat3::from_diagonal(DVec3::new(0.1, -0.5, 0.3)),
+        );
+        let f = Force::new(DVec3::X, DVec3::Y);
+        assert!(ri.to_sym6().solve(f).is_none());
+        assert!(RigidInertia::ZERO.to_sym6().solve(f).is_none());
     }
 
     #[test]
