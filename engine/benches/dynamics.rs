@@ -9,6 +9,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use quadsim_engine::aba::aba;
 use quadsim_engine::crba::crba;
 use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
+use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::rnea::rnea;
 use quadsim_engine::{Data, Model};
@@ -47,6 +48,12 @@ fn algorithms(c: &mut Criterion) {
     let (model, s, tau, a) = setup();
     let mut data = Data::new(&model);
     let mut g = c.benchmark_group("quad16");
+    g.bench_function("forward_kinematics", |b| {
+        b.iter(|| {
+            forward_kinematics(&model, &mut data, black_box(&s.q), black_box(&s.v));
+            data.vel[1].lin.x
+        })
+    });
     g.bench_function("aba", |b| {
         b.iter(|| {
             aba(
