@@ -5,7 +5,7 @@
 use glam::DVec3;
 use quadsim_engine::Data;
 use quadsim_engine::aba::aba_from_kinematics;
-use quadsim_engine::control::joint_pd::{JointPd, static_stance_torques};
+use quadsim_engine::control::joint_pd::{JointPd, bandwidth_gains, static_stance_torques};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::model::{BaseKind, Model};
 use quadsim_engine::robots;
@@ -69,8 +69,8 @@ fn static_stance_torques_balance_the_robot() {
 #[test]
 fn joint_pd_law() {
     let pd = JointPd {
-        kp_nm_per_rad: 100.0,
-        kd_nms_per_rad: 2.0,
+        kp_nm_per_rad: vec![100.0; 2],
+        kd_nms_per_rad: vec![2.0; 2],
         target_rad: vec![0.5, -0.5],
         feedforward_nm: vec![1.0, 0.0],
     };
@@ -96,4 +96,23 @@ fn support_forces(pts: &[DVec3], com: DVec3, weight: f64) -> Vec<f64> {
             }
         })
         .collect()
+}
+
+#[test]
+fn bandwidth_gains_scale_with_the_apparent_inertia() {
+    // A single pendulum: the apparent inertia is I_c + m d², and the closed
+    // loop kp/M = ω², kd/M = 2ζω.
+    use quadsim_engine::description::RobotBuilder;
+    let d = RobotBuilder::new("p")
+        .link("base").mass(1.0).done()
+        .link("arm").mass(2.0).com(DVec3::new(0.0, 0.0, -0.5)).inertia(glam::DMat3::from_diagonal(DVec3::splat(0.01))).done()
+        .revolute("j", "base", "arm", DVec3::ZERO, DVec3::Y)
+        .build();
+    let model = Model::from_description(&d, BaseKind::Fixed).unwrap();
+    let mut data = Data::new(&model);
+    let (kp, kd) = bandwidth_gains(&model, &mut data, &[0.3], 2.0, 0.7);
+    let m = 0.01 + 2.0 * 0.25;
+    let w = std::f64::consts::TAU * 2.0;
+    assert!((kp[0] - m * w * w).abs() < 1e-12 * kp[0]);
+    assert!((kd[0] - 2.0 * 0.7 * m * w).abs() < 1e-12 * kd[0]);
 }

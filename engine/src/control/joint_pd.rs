@@ -8,13 +8,13 @@ use crate::model::Model;
 use crate::nle::generalized_gravity;
 use glam::DVec3;
 
-/// Joint PD: `τ = τ_ff + kp (q_target − q) − kd q̇` on every actuated joint.
+/// Joint PD: `τᵢ = τ_ffᵢ + kpᵢ (q_targetᵢ − qᵢ) − kdᵢ q̇ᵢ` on every actuated joint.
 #[derive(Clone, Debug, PartialEq)]
 pub struct JointPd {
-    /// Proportional gain (N·m/rad).
-    pub kp_nm_per_rad: f64,
-    /// Derivative gain (N·m·s/rad).
-    pub kd_nms_per_rad: f64,
+    /// Proportional gain per joint (N·m/rad).
+    pub kp_nm_per_rad: Vec<f64>,
+    /// Derivative gain per joint (N·m·s/rad).
+    pub kd_nms_per_rad: Vec<f64>,
     /// Target joint angles (rad), joints only (nv − base).
     pub target_rad: Vec<f64>,
     /// Feed-forward torques (N·m), joints only.
@@ -26,10 +26,25 @@ impl JointPd {
     pub fn compute(&self, q_joints: &[f64], qd_joints: &[f64], tau_joints: &mut [f64]) {
         for i in 0..tau_joints.len() {
             tau_joints[i] = self.feedforward_nm[i]
-                + self.kp_nm_per_rad * (self.target_rad[i] - q_joints[i])
-                - self.kd_nms_per_rad * qd_joints[i];
+                + self.kp_nm_per_rad[i] * (self.target_rad[i] - q_joints[i])
+                - self.kd_nms_per_rad[i] * qd_joints[i];
         }
     }
+}
+
+/// Gains that give every joint the same closed-loop bandwidth: `kpᵢ = Mᵢᵢ ω²`,
+/// `kdᵢ = 2 ζ Mᵢᵢ ω` with `ω = 2π·bandwidth_hz` and `Mᵢᵢ` the joint's apparent
+/// inertia (its diagonal entry of the mass matrix at `q`: the subtree's inertia
+/// about the axis with the rest of the robot held). Uniform gains would be
+/// unstable on a light distal link (quad16's foot: Mᵢᵢ ≈ 6e-4 kg·m²) under a
+/// sampled controller; scaling by Mᵢᵢ keeps `kd·T/Mᵢᵢ = 2ζωT` the same for all.
+pub fn bandwidth_gains(model: &Model, data: &mut Data, q: &[f64], bandwidth_hz: f64, damping_ratio: f64) -> (Vec<f64>, Vec<f64>) {
+    let m = crate::crba::crba(model, data, q);
+    let w = std::f64::consts::TAU * bandwidth_hz;
+    let nv = model.nv;
+    let b = model.base_nv();
+    let diag: Vec<f64> = (b..nv).map(|i| m[i * nv + i]).collect();
+    (diag.iter().map(|mi| mi * w * w).collect(), diag.iter().map(|mi| 2.0 * damping_ratio * mi * w).collect())
 }
 
 /// Joint torques that hold a floating-base robot still at configuration `q`
