@@ -55,6 +55,66 @@ impl State {
             v: vec![0.0; model.nv],
         }
     }
+
+    /// A checked state for `model`: sizes nq and nv, finite entries, and a base
+    /// quaternion of unit norm to 1e-6 (it is renormalised exactly).
+    ///
+    /// # Errors
+    /// [`StateError`] naming the offending field.
+    pub fn from_parts(model: &Model, q: Vec<f64>, v: Vec<f64>) -> Result<State, StateError> {
+        for (field, got, expected) in [("q", q.len(), model.nq), ("v", v.len(), model.nv)] {
+            if got != expected {
+                return Err(StateError::Size {
+                    field,
+                    expected,
+                    got,
+                });
+            }
+        }
+        for (field, x) in [("q", &q), ("v", &v)] {
+            if let Some(index) = x.iter().position(|e| !e.is_finite()) {
+                return Err(StateError::NotFinite { field, index });
+            }
+        }
+        let mut q = q;
+        if model.is_floating() {
+            let norm = q[3..7].iter().map(|e| e * e).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > 1e-6 {
+                return Err(StateError::QuaternionNorm { norm });
+            }
+            normalize_base_quat(model, &mut q);
+        }
+        Ok(State { q, v })
+    }
+}
+
+/// A state that does not fit its model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StateError {
+    /// Wrong vector length.
+    #[error("state field '{field}' has {got} entries, the model needs {expected}")]
+    Size {
+        /// `q` or `v`.
+        field: &'static str,
+        /// The model's size (nq or nv).
+        expected: usize,
+        /// The given size.
+        got: usize,
+    },
+    /// A NaN or infinite entry.
+    #[error("state field '{field}' entry {index} is not finite")]
+    NotFinite {
+        /// `q` or `v`.
+        field: &'static str,
+        /// Index of the first bad entry.
+        index: usize,
+    },
+    /// The base quaternion `q[3..7]` is not of unit norm.
+    #[error("state field 'q': base quaternion q[3..7] has norm {norm}, not 1")]
+    QuaternionNorm {
+        /// Its norm.
+        norm: f64,
+    },
 }
 
 /// State-dependent forces evaluated inside **every** derivative evaluation
@@ -81,6 +141,15 @@ impl<F: ForceModel + ?Sized> ForceModel for &mut F {
     #[inline]
     fn apply(&mut self, model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &mut [f64]) {
         (**self).apply(model, data, q, v, tau);
+    }
+}
+
+/// Both force models, in order (e.g. ground contact and a push).
+impl<A: ForceModel, B: ForceModel> ForceModel for (A, B) {
+    #[inline]
+    fn apply(&mut self, model: &Model, data: &mut Data, q: &[f64], v: &[f64], tau: &mut [f64]) {
+        self.0.apply(model, data, q, v, tau);
+        self.1.apply(model, data, q, v, tau);
     }
 }
 
@@ -350,6 +419,36 @@ mod tests {
             .done()
             .build();
         Model::from_description(&d, BaseKind::Floating).unwrap()
+    }
+
+    #[test]
+    fn from_parts_names_the_bad_field() {
+        let m = free_body();
+        let ok = State::from_parts(&m, m.neutral_q(), vec![0.0; 6]).unwrap();
+        assert_eq!(ok, State::neutral(&m));
+        assert_eq!(
+            State::from_parts(&m, vec![0.0; 6], vec![0.0; 6]),
+            Err(StateError::Size {
+                field: "q",
+                expected: 7,
+                got: 6
+            })
+        );
+        let mut v = vec![0.0; 6];
+        v[4] = f64::NAN;
+        assert_eq!(
+            State::from_parts(&m, m.neutral_q(), v),
+            Err(StateError::NotFinite {
+                field: "v",
+                index: 4
+            })
+        );
+        let mut q = m.neutral_q();
+        q[6] = 2.0;
+        assert!(matches!(
+            State::from_parts(&m, q, vec![0.0; 6]),
+            Err(StateError::QuaternionNorm { .. })
+        ));
     }
 
     /// Integrating a constant twist in n small steps equals one big step: the
