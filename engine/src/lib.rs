@@ -20,6 +20,7 @@
 pub mod aba;
 pub mod com;
 pub mod control;
+pub mod contact;
 pub mod crba;
 pub mod data;
 pub mod description;
@@ -36,6 +37,7 @@ pub mod rnea;
 pub mod robots;
 pub mod spatial;
 pub mod support;
+pub mod terrain;
 
 pub use data::Data;
 pub use model::{BaseKind, Model, ModelError};
