@@ -37,15 +37,22 @@ pub struct PassiveParams {
 }
 
 impl Default for PassiveParams {
-    /// Everything on; limit spring 1000 N·m/rad with 5 N·m·s/rad, friction ε = 0.1 rad/s.
+    /// Everything on; limit spring 200 N·m/rad with 0.5 N·m·s/rad, friction ε = 0.1 rad/s.
+    ///
+    /// The limit gains are bounded by the lightest joint they must hold at the
+    /// default 0.5 ms step: quad16's ankle drives only the 0.5 kg foot
+    /// (I ≈ 6.3e-4 kg·m²), so `√(k/I)·dt = 0.28` and `b·dt/I = 0.40`. With
+    /// 5 N·m·s/rad the damper alone gave `b·dt/I = 4`: a foot spinning into its
+    /// limit came out 5× faster the other way (regression test
+    /// `limit_damper_is_stable_on_a_light_foot` in `engine/tests/analytic.rs`).
     fn default() -> Self {
         Self {
             damping: true,
             friction: true,
             friction_epsilon: 0.1,
             limits: true,
-            limit_stiffness: 1000.0,
-            limit_damping: 5.0,
+            limit_stiffness: 200.0,
+            limit_damping: 0.5,
             saturation: true,
         }
     }

@@ -396,3 +396,71 @@ fn actuator_torque_saturates_at_effort_limit() {
         assert!((s.v[0] - dt * 100.0 / inertia).abs() <= 1e-12 * s.v[0]);
     }
 }
+
+/// Regression: the soft limit's damper must not pump energy into a light
+/// link. quad16's foot (0.5 kg, I ≈ 6.3e-4 kg·m² about the ankle) spinning into
+/// its ±π limit at 40 rad/s used to leave it at ~195 rad/s the other way with
+/// the old 5 N·m·s/rad default (b·dt/I = 4 at dt = 0.5 ms). Invariant: with
+/// the default passive model, a free spin into the limit never comes out
+/// faster than it went in.
+#[test]
+fn limit_damper_is_stable_on_a_light_foot() {
+    use quadsim_engine::Data;
+    use quadsim_engine::description::{JointDesc, JointKind, RobotBuilder};
+    use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
+    use quadsim_engine::model::{BaseKind, Model};
+    use quadsim_engine::spatial::Transform;
+    let mut joint = JointDesc::new(
+        "ankle",
+        JointKind::Revolute {
+            axis: glam::DVec3::Y,
+        },
+        "shank",
+        "foot",
+        Transform::IDENTITY,
+    );
+    joint.limits = Some((-std::f64::consts::PI, std::f64::consts::PI));
+    let d = RobotBuilder::new("foot")
+        .link("shank")
+        .mass(1.0)
+        .done()
+        .link("foot")
+        .mass(0.5)
+        .com(glam::DVec3::new(0.0, 0.0, -0.03))
+        .inertia(glam::DMat3::from_diagonal(glam::DVec3::splat(0.00018)))
+        .done()
+        .joint(joint)
+        .build();
+    let mut model = Model::from_description(&d, BaseKind::Fixed).unwrap();
+    model.gravity = glam::DVec3::ZERO;
+    let mut data = Data::new(&model);
+    for integrator in [Integrator::SemiImplicitEuler, Integrator::Rk4] {
+        let mut ws = StepWorkspace::new(&model);
+        let mut state = State {
+            q: vec![3.0],
+            v: vec![40.0],
+        };
+        let mut peak: f64 = 0.0;
+        for _ in 0..400 {
+            step(
+                &model,
+                &mut data,
+                &mut ws,
+                &mut state,
+                &[0.0],
+                0.0005,
+                integrator,
+                &mut (),
+            );
+            peak = peak.max(state.v[0].abs());
+        }
+        assert!(
+            state.v[0] < 0.0,
+            "{integrator:?}: the limit turned the foot back"
+        );
+        assert!(
+            peak <= 40.0 + 1e-9,
+            "{integrator:?}: came out at {peak} rad/s from 40"
+        );
+    }
+}
