@@ -408,4 +408,3 @@ fn feet_from_description_use_the_foot_sphere() {
     let bad = [ContactPoint::new(3, DVec3::ZERO, 0.01, ContactKind::Knee)];
     assert!(ContactPoint::validate(&bad, &model).is_err());
 }
-
