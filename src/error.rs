@@ -16,6 +16,9 @@ pub enum CliError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The simulation diverged: the robot, time and quantity are named.
+    #[error("{0}")]
+    Diverged(String),
 }
 
 impl CliError {
@@ -23,7 +26,7 @@ impl CliError {
     pub fn exit_code(&self) -> i32 {
         match self {
             CliError::BadInput(_) => 2,
-            CliError::Io { .. } => 1,
+            CliError::Io { .. } | CliError::Diverged(_) => 1,
         }
     }
 }

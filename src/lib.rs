@@ -9,7 +9,9 @@ pub mod cli;
 pub mod error;
 pub mod model_source;
 pub mod scenario;
+pub mod terrain_spec;
 pub mod urdf;
+pub mod world;
 
 pub use quadsim_components as components;
 pub use quadsim_engine as engine;

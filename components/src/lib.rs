@@ -42,10 +42,12 @@
 
 mod build;
 mod collider;
+mod forces;
 mod joint;
 mod link;
 mod resources;
 mod robot;
+mod run;
 
 pub use build::{
     CompileError, DescribeError, describe_robot, describe_robot_with_links, spawn_joint,
@@ -57,8 +59,10 @@ pub use joint::{
     JointMotion, JointPlacement, VelocityLimit,
 };
 pub use link::{CenterOfMass, ComputedInertia, Foot, FootPoint, Inertia, Link, LinkPose, Mass};
+pub use forces::{ContactForces, Ground, Push, Terrain};
+pub use run::{ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, RobotRun};
 pub use resources::{
-    ContactForces, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
+    PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
     ThreadPoolError,
 };
 pub use robot::{

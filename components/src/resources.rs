@@ -5,13 +5,15 @@ use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
-use quadsim_engine::integrate::{ForceModel, Integrator, State, StepWorkspace};
+use quadsim_engine::integrate::{Integrator, State, StepWorkspace};
 use quadsim_engine::model::STANDARD_GRAVITY;
 use quadsim_engine::passive::PassiveParams;
 use quadsim_engine::{Data, Model};
 use thiserror::Error;
 
+use crate::forces::ContactForces;
 use crate::robot::RobotIndex;
+use crate::run::RobotRun;
 
 /// Settings of the fixed step, shared by every robot of the world.
 #[derive(Resource, Clone, Copy, Debug, PartialEq)]
@@ -59,6 +61,9 @@ pub struct ThreadPoolError {
     pub source: rayon::ThreadPoolBuildError,
 }
 
+/// Below this many robots a stage runs on the calling thread.
+pub const PARALLEL_MIN_ITEMS: usize = 4;
+
 /// The one thread pool robots are stepped on, sized by the `threads` setting
 /// (the CLI's `--threads`). Owned by the world rather than global, so each
 /// world (and each test) can have its own size.
@@ -83,23 +88,24 @@ impl SimThreadPool {
         self.pool.current_num_threads()
     }
 
+    /// Applies `f` to every item: in parallel on the pool's workers when there
+    /// are at least [`PARALLEL_MIN_ITEMS`] items and more than one worker,
+    /// else in order on the calling thread (waking workers costs more than a
+    /// few robots' work). Items are independent, so the result is the same
+    /// either way.
+    pub fn for_each<T: Send>(&self, items: &mut [T], f: impl Fn(&mut T) + Sync + Send) {
+        use rayon::prelude::*;
+        if self.threads() <= 1 || items.len() < PARALLEL_MIN_ITEMS {
+            items.iter_mut().for_each(f);
+        } else {
+            self.pool.install(|| items.par_iter_mut().for_each(f));
+        }
+    }
+
     /// Runs `f` inside the pool, so rayon's parallel iterators in it use these workers.
     pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
         self.pool.install(f)
     }
-}
-
-/// External forces on one robot during a step: the seam through which the
-/// contact model (a later issue) enters the integrator. It is a
-/// [`ForceModel`], so it is re-evaluated at every derivative evaluation (every
-/// RK4 stage). The `Contact` stage prepares it before the step; today it holds
-/// nothing and adds no force (zero-contact free fall).
-#[derive(Clone, Debug, Default)]
-pub struct ContactForces {}
-
-impl ForceModel for ContactForces {
-    #[inline]
-    fn apply(&mut self, _: &Model, _: &mut Data, _: &[f64], _: &[f64], _: &mut [f64]) {}
 }
 
 /// The packed, authoritative simulation state of one robot.
@@ -119,8 +125,10 @@ pub struct RobotSim {
     pub tau_actuator: Vec<f64>,
     /// Integrator buffers and the passive joint model.
     pub workspace: StepWorkspace,
-    /// Contact seam (see [`ContactForces`]).
+    /// Ground contacts and pushes, evaluated inside the integrator (see [`ContactForces`]).
     pub contact: ContactForces,
+    /// Controller, observation, fall criteria and metrics.
+    pub run: RobotRun,
     /// Link entity of each frame of the model (frame `i` ↔ `link_entities[i]`).
     pub link_entities: Vec<Entity>,
     /// Debug counter: the pool worker (`rayon::current_thread_index`) that ran
@@ -145,6 +153,7 @@ impl RobotSim {
             tau_actuator: vec![0.0; model.nv],
             workspace,
             contact: ContactForces::default(),
+            run: RobotRun::default(),
             link_entities,
             last_worker: None,
             model,

@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 
 pub mod dynamics;
 pub mod models;
+pub mod run;
 
 /// quadsim: simulate quadruped robots.
 #[derive(Debug, Parser)]
@@ -17,6 +18,12 @@ pub struct Cli {
 /// quadsim's commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Run a scenario: progress bar, metrics table, `DIR/summary.json`.
+    Run(run::RunArgs),
+    /// Validate a scenario without running it (errors and stability warnings).
+    Check(run::CheckArgs),
+    /// Print the JSON Schema of the scenario format.
+    Schema,
     /// Evaluate dynamics (ABA, RNEA, CRBA, …) on states in the oracle's JSON format.
     Dynamics(dynamics::DynamicsArgs),
     /// List the built-in robots, or one robot's parameters.
@@ -26,6 +33,9 @@ pub enum Command {
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
     match cli.command {
+        Command::Run(a) => run::run(a),
+        Command::Check(a) => run::check(a),
+        Command::Schema => run::schema(),
         Command::Dynamics(a) => dynamics::run(a),
         Command::Models(a) => models::run(a),
     }

@@ -109,6 +109,12 @@ pub struct CustomGround {
     pub exponent: Option<f64>,
     /// Hybrid law: depth where stiffening starts (m).
     pub hybrid_depth_m: Option<f64>,
+    /// Stiffness of the tangential (stick) spring (N/m). Default: the normal stiffness.
+    pub tangential_stiffness_n_per_m: Option<f64>,
+    /// Damping of the tangential (stick) spring (N·s/m). Default: a quarter of the normal damping.
+    pub tangential_damping_ns_per_m: Option<f64>,
+    /// Hybrid law: dimensionless stiffening s (default 1; stiffness k (1 + 2 s (δ − δ₀)/δ₀) beyond δ₀).
+    pub hybrid_stiffening: Option<f64>,
 }
 
 /// `[[terrains]]`: one terrain entity. Keys beside `kind` depend on the kind.

@@ -24,6 +24,8 @@ pub enum Domain {
     Vec3,
     /// An array of tables (checked by the terrain builder).
     Tables,
+    /// A number ≥ 0, or an array of them (one per joint; the length is checked when the model is known).
+    Gains,
 }
 
 /// A key accepted by a `kind`: name, domain, required.
@@ -97,8 +99,10 @@ pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
     (
         "joint_pd",
         &[
-            ("kp_nm_per_rad", Domain::NonNegative, false),
-            ("kd_nms_per_rad", Domain::NonNegative, false),
+            ("kp_nm_per_rad", Domain::Gains, false),
+            ("kd_nms_per_rad", Domain::Gains, false),
+            ("bandwidth_hz", Domain::Positive, false),
+            ("damping_ratio", Domain::NonNegative, false),
             ("gravity_compensation", Domain::Text, false),
         ],
     ),
@@ -201,29 +205,29 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
                 ));
             }
         }
-        if let Some(sp) = r.start_position_m {
-            if sp.iter().any(|x| !x.is_finite()) {
-                return Err(loc.at(
-                    &format!("{p}.start_position_m"),
-                    "must be three finite numbers (m)",
-                ));
-            }
+        if let Some(sp) = r.start_position_m
+            && sp.iter().any(|x| !x.is_finite())
+        {
+            return Err(loc.at(
+                &format!("{p}.start_position_m"),
+                "must be three finite numbers (m)",
+            ));
         }
         if !r.start_yaw_deg.is_finite() {
             return Err(loc.at(&format!("{p}.start_yaw_deg"), "must be finite (deg)"));
         }
-        if let Some(js) = &r.start_joints_rad {
-            if js.iter().any(|x| !x.is_finite()) {
-                return Err(loc.at(&format!("{p}.start_joints_rad"), "must be finite (rad)"));
-            }
+        if let Some(js) = &r.start_joints_rad
+            && js.iter().any(|x| !x.is_finite())
+        {
+            return Err(loc.at(&format!("{p}.start_joints_rad"), "must be finite (rad)"));
         }
-        if let Some(t) = &r.terrain {
-            if !terrain_names.contains(&t.as_str()) {
-                return Err(loc.at(
-                    &format!("{p}.terrain"),
-                    format!("unknown terrain '{t}' (terrains: {})", list(&terrain_names)),
-                ));
-            }
+        if let Some(t) = &r.terrain
+            && !terrain_names.contains(&t.as_str())
+        {
+            return Err(loc.at(
+                &format!("{p}.terrain"),
+                format!("unknown terrain '{t}' (terrains: {})", list(&terrain_names)),
+            ));
         }
         for (j, c) in r.contact_points.iter().enumerate() {
             if !["knees", "torso"].contains(&c.as_str()) {
@@ -314,18 +318,18 @@ fn ground(loc: &Locator<'_>, path: &str, g: &GroundSpec) -> Result<(), ScenarioE
             if !(c.friction.is_finite() && c.friction >= 0.0) {
                 return Err(loc.at(&format!("{path}.friction"), "must be finite and ≥ 0"));
             }
-            if let Some(law) = &c.law {
-                if !["linear", "hunt_crossley", "hybrid"].contains(&law.as_str()) {
-                    return Err(loc.at(
-                        &format!("{path}.law"),
-                        format!("unknown law '{law}' (linear, hunt_crossley, hybrid)"),
-                    ));
-                }
+            if let Some(law) = &c.law
+                && !["linear", "hunt_crossley", "hybrid"].contains(&law.as_str())
+            {
+                return Err(loc.at(
+                    &format!("{path}.law"),
+                    format!("unknown law '{law}' (linear, hunt_crossley, hybrid)"),
+                ));
             }
-            if let Some(n) = c.exponent {
-                if !(n.is_finite() && n >= 1.0) {
-                    return Err(loc.at(&format!("{path}.exponent"), "must be ≥ 1"));
-                }
+            if let Some(n) = c.exponent
+                && !(n.is_finite() && n >= 1.0)
+            {
+                return Err(loc.at(&format!("{path}.exponent"), "must be ≥ 1"));
             }
             if let Some(d) = c.hybrid_depth_m {
                 positive(loc, &format!("{path}.hybrid_depth_m"), d)?;
@@ -407,6 +411,18 @@ fn check_domain(
                 Ok(())
             }
             _ => bad("must be an array of three finite numbers"),
+        },
+        Domain::Gains => match v {
+            toml::Value::Array(a) => {
+                if a.iter()
+                    .all(|x| as_f64(x).is_some_and(|g| g.is_finite() && g >= 0.0))
+                {
+                    Ok(())
+                } else {
+                    bad("must be numbers ≥ 0")
+                }
+            }
+            _ => check_domain(loc, path, Domain::NonNegative, v),
         },
         Domain::Count => match v {
             toml::Value::Integer(i) if *i >= 1 => Ok(()),

@@ -10,6 +10,10 @@
 //!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool).
 
 mod compile;
+mod contact;
+mod control;
+mod ground;
+mod metrics;
 mod publish;
 mod schedule;
 mod simulation;
@@ -18,6 +22,10 @@ mod step;
 pub use compile::{
     CompileSchedule, DirtyRobots, build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
 };
+pub use contact::{height_above_ground, observe_robot, update_contacts};
+pub use control::{control_robot, run_controllers};
+pub use ground::compile_ground;
+pub use metrics::{record_metrics, record_robot};
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{
     SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,

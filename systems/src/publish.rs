@@ -3,7 +3,6 @@
 use bevy_ecs::prelude::*;
 use quadsim_components::{LinkPose, PoseSync, RobotBatch, SimClock, SimThreadPool};
 use quadsim_engine::kinematics::{forward_kinematics_pos, frame_pose};
-use rayon::prelude::*;
 
 /// Run condition: poses are due after this step (rate or request, see [`PoseSync`]).
 pub fn pose_sync_due(clock: Res<SimClock>, sync: Res<PoseSync>) -> bool {
@@ -22,10 +21,7 @@ pub fn sync_link_poses(
     mut poses: Query<&mut LinkPose>,
 ) {
     let sims = &mut batch.sims;
-    pool.install(|| {
-        sims.par_iter_mut()
-            .for_each(|s| forward_kinematics_pos(&s.model, &mut s.data, &s.state.q));
-    });
+    pool.for_each(sims, |s| forward_kinematics_pos(&s.model, &mut s.data, &s.state.q));
     for sim in sims.iter() {
         for (frame, &link) in sim.link_entities.iter().enumerate() {
             if let Ok(mut pose) = poses.get_mut(link) {

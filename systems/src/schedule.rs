@@ -3,6 +3,9 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
+use crate::contact::update_contacts;
+use crate::control::run_controllers;
+use crate::metrics::record_metrics;
 use crate::publish::{pose_sync_due, sync_link_poses};
 use crate::step::{advance_clock, step_robots};
 
@@ -101,12 +104,16 @@ pub fn build_step_schedule() -> Schedule {
 /// Registers the gait systems (none yet: the gait planner comes in a later issue).
 pub fn register_gait(_schedule: &mut Schedule) {}
 
-/// Registers the control systems (none yet: controllers come in a later issue).
-pub fn register_control(_schedule: &mut Schedule) {}
+/// Registers [`run_controllers`] (joint PD; VMC comes with the walking issue).
+pub fn register_control(schedule: &mut Schedule) {
+    schedule.add_systems(run_controllers.in_set(SimSystems::Control));
+}
 
-/// Registers the contact systems (none yet: the ground model comes in a later
-/// issue, through [`ContactForces`](quadsim_components::ContactForces)).
-pub fn register_contact(_schedule: &mut Schedule) {}
+/// Registers [`update_contacts`]: contact states (anchors) and observations,
+/// once per step at the step's start state.
+pub fn register_contact(schedule: &mut Schedule) {
+    schedule.add_systems(update_contacts.in_set(SimSystems::Contact));
+}
 
 /// Registers the dynamics systems (none: see [`SimSystems::Dynamics`]).
 pub fn register_dynamics(_schedule: &mut Schedule) {}
@@ -122,9 +129,11 @@ pub fn register_integrate(schedule: &mut Schedule) {
 
 /// Registers [`sync_link_poses`], gated by [`pose_sync_due`].
 pub fn register_publish(schedule: &mut Schedule) {
+    schedule.add_systems(record_metrics.in_set(SimSystems::Publish));
     schedule.add_systems(
         sync_link_poses
             .run_if(pose_sync_due)
-            .in_set(SimSystems::Publish),
+            .in_set(SimSystems::Publish)
+            .after(record_metrics),
     );
 }

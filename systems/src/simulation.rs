@@ -3,6 +3,7 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::system::RunSystemOnce;
 use quadsim_components::{
+    ControlRate, DefaultGroundPlane, Ground,
     CompileError, CompileFailure, PoseSync, RobotBatch, RobotIndex, RobotSim, SimClock, SimConfig,
     SimThreadPool, ThreadPoolError, spawn_robot_with_base,
 };
@@ -61,6 +62,9 @@ impl Simulation {
         world.init_resource::<RobotBatch>();
         world.init_resource::<PoseSync>();
         world.init_resource::<DirtyRobots>();
+        world.init_resource::<Ground>();
+        world.init_resource::<DefaultGroundPlane>();
+        world.init_resource::<ControlRate>();
         Ok(Self {
             world,
             compile: build_compile_schedule(),

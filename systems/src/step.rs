@@ -3,7 +3,6 @@
 use bevy_ecs::prelude::*;
 use quadsim_components::{RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool};
 use quadsim_engine::integrate::{self, Integrator};
-use rayon::prelude::*;
 
 /// Advances every compiled robot by one `dt` on the world's thread pool.
 ///
@@ -17,10 +16,7 @@ pub fn step_robots(
 ) {
     let (dt_s, integrator) = (config.dt_s, config.integrator);
     let sims = &mut batch.sims;
-    pool.install(|| {
-        sims.par_iter_mut()
-            .for_each(|sim| step_robot(sim, dt_s, integrator));
-    });
+    pool.for_each(sims, |sim| step_robot(sim, dt_s, integrator));
 }
 
 /// One robot's step: the engine's integrator with the robot's actuator command

@@ -2,9 +2,10 @@
 //! parallel integration of every robot, the clock and the pose copy all run on
 //! preallocated memory. Measured with a counting global allocator (this test
 //! binary only). The one allocation left is rayon's job-injection queue, which
-//! takes a new block of 63 slots every 63 jobs sent into the pool (two per
-//! step: integration and pose copy), so about one per 31 steps; anything per
-//! robot or per step would show up as ≥ 1 per step.
+//! takes a new block of 63 slots every 63 jobs sent into the pool (five per
+//! step: control, contact, integration, metrics and pose copy), so about one
+//! per 13 steps (5/63 ≈ 0.079); anything per robot or per step would show up
+//! as ≥ 1 per step.
 
 #[path = "../../engine/tests/common/mod.rs"]
 mod common;
@@ -40,6 +41,6 @@ fn steady_state_steps_do_not_allocate() {
         let stats = region.change();
         let per_step = (stats.allocations + stats.reallocations) as f64 / steps as f64;
         println!("{threads} threads, {integrator:?}: {per_step} allocations per step");
-        assert!(per_step < 0.05, "{per_step} allocations per step");
+        assert!(per_step < 0.1, "{per_step} allocations per step");
     }
 }

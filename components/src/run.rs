@@ -1,0 +1,120 @@
+//! Per-robot run bookkeeping beside the packed state: the controller, what the
+//! `Contact` stage observed at the start of the step, the fall criteria and
+//! the metrics accumulated at full rate.
+
+use glam::DVec3;
+use quadsim_engine::control::joint_pd::JointPd;
+use quadsim_engine::metrics::{FootSample, MetricsAccumulator};
+use quadsim_engine::spatial::Transform;
+
+/// How a robot's actuators are commanded (written by the `Control` stage at
+/// the controller rate and held between controller ticks).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Controller {
+    /// No actuation: the joints are limp.
+    #[default]
+    None,
+    /// Joint-space PD toward fixed targets.
+    JointPd(JointPd),
+}
+
+impl Controller {
+    /// The joint targets (rad), when the controller tracks some.
+    pub fn joint_targets(&self) -> Option<&[f64]> {
+        match self {
+            Controller::None => None,
+            Controller::JointPd(pd) => Some(&pd.target_rad),
+        }
+    }
+}
+
+/// The robot's state as the `Contact` stage saw it at the start of the step,
+/// after updating the contact states.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Observation {
+    /// Time of the observation (s).
+    pub t_s: f64,
+    /// Base placement in the world.
+    pub base: Transform,
+    /// Height of the base origin above the terrain beneath it (m; +∞ over no ground).
+    pub base_height_above_ground_m: f64,
+    /// Whole-body centre of mass (m, world).
+    pub com_m: DVec3,
+    /// CoM velocity (m/s, world).
+    pub com_velocity_mps: DVec3,
+    /// Height of the CoM above the terrain beneath it (m).
+    pub com_height_above_ground_m: f64,
+    /// Joint angles (rad) and velocities (rad/s) at the observation.
+    pub q_joints: Vec<f64>,
+    /// Joint velocities (rad/s).
+    pub qd_joints: Vec<f64>,
+    /// Feet (the first `n_feet` contact points).
+    pub feet: Vec<FootSample>,
+    /// The fall criteria hold (see `scenarios/README.md`).
+    pub fallen: bool,
+}
+
+/// Fall criteria of one robot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FallCriteria {
+    /// Tilt (angle between base z and world z) beyond which the robot has fallen (rad).
+    pub max_tilt_rad: f64,
+    /// Base height above ground below which the robot has fallen (m): 50 % of nominal.
+    pub min_base_height_m: f64,
+}
+
+impl Default for FallCriteria {
+    fn default() -> Self {
+        Self { max_tilt_rad: 60f64.to_radians(), min_base_height_m: 0.0 }
+    }
+}
+
+/// Run bookkeeping of one robot.
+#[derive(Clone, Debug)]
+pub struct RobotRun {
+    /// The actuator command law.
+    pub controller: Controller,
+    /// How many of the contact points (the first ones) are feet.
+    pub n_feet: usize,
+    /// Fall criteria.
+    pub fall: FallCriteria,
+    /// Latest observation.
+    pub observation: Observation,
+    /// Metrics, recorded every step by the `Publish` stage.
+    pub metrics: MetricsAccumulator,
+    /// Scratch: saturated actuator torques of the joints (N·m).
+    pub tau_joints: Vec<f64>,
+}
+
+impl Default for RobotRun {
+    fn default() -> Self {
+        Self {
+            controller: Controller::None,
+            n_feet: 0,
+            fall: FallCriteria::default(),
+            observation: Observation::default(),
+            metrics: MetricsAccumulator::new(0.0, 0.0),
+            tau_joints: Vec::new(),
+        }
+    }
+}
+
+/// The controller rate as a step divisor: controllers run on steps where
+/// `step % every_steps == 0` (500 Hz at dt = 0.5 ms: every 4th step) and their
+/// command is held in between.
+#[derive(bevy_ecs::prelude::Resource, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ControlRate {
+    /// Steps per controller tick (≥ 1).
+    pub every_steps: u64,
+}
+
+impl Default for ControlRate {
+    fn default() -> Self {
+        Self { every_steps: 1 }
+    }
+}
+
+/// The default ground plane (outside every terrain), kept apart from the
+/// terrain entities so that recompiling the union keeps it.
+#[derive(bevy_ecs::prelude::Resource, Clone, Debug, Default)]
+pub struct DefaultGroundPlane(pub Option<quadsim_engine::terrain::DefaultGround>);

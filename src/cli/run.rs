@@ -1,0 +1,352 @@
+//! `quadsim run`, `quadsim check` and `quadsim schema`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use quadsim_engine::contact::stability::check_stability;
+use quadsim_engine::metrics::MetricsSummary;
+use serde_json::{Value, json};
+use sha2::{Digest, Sha256};
+
+use crate::error::{CliError, bad};
+use crate::scenario::{Scenario, load_scenario};
+use crate::world::{Overrides, World, build_world};
+
+/// Version of `summary.json`'s layout.
+pub const SUMMARY_FORMAT_VERSION: u32 = 1;
+
+/// Arguments of `quadsim run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Output directory (default `runs/<scenario name>/`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Simulated duration (s), overriding `world.duration_s`.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Worker threads for stepping robots in parallel (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// World seed, overriding `world.seed`.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// No progress bar and no metrics table (summary.json is still written).
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Arguments of `quadsim check`.
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The scenario file (TOML).
+    pub scenario: PathBuf,
+}
+
+fn scenario_error(e: crate::scenario::ScenarioError) -> CliError {
+    bad(e.to_string())
+}
+
+fn overrides(a: &RunArgs) -> Result<Overrides, CliError> {
+    if let Some(d) = a.duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        return Err(bad(format!(
+            "--duration: must be a finite time > 0 (s), got {d}"
+        )));
+    }
+    Ok(Overrides {
+        duration_s: a.duration,
+        seed: a.seed,
+        threads: a.threads,
+    })
+}
+
+/// Warnings about the scenario that do not stop it: contact stability at this
+/// time step for each robot's foot mass on each ground it may touch.
+pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
+    let mut out = Vec::new();
+    let ground = crate::world::ground_of(world);
+    let mut materials: Vec<(String, quadsim_engine::contact::GroundMaterial)> = Vec::new();
+    if let Some(d) = ground.default_ground() {
+        materials.push(("world.default_ground".into(), d.material));
+    }
+    for (i, p) in ground.patches().iter().enumerate() {
+        materials.push((format!("terrain {i}"), *p.material()));
+    }
+    for (name, root) in &world.robots {
+        let Some(sim) = world.sim.robot(*root) else {
+            continue;
+        };
+        // The effective mass a foot's spring acts on: the robot's mass shared by
+        // its feet in stance (the slowest mode) and the lightest foot link alone
+        // (the fastest).
+        let n = sim.run.n_feet.max(1) as f64;
+        let m_stance = sim.model.total_mass / n;
+        for (label, mat) in &materials {
+            for w in check_stability(mat, scn.file.world.dt_s, m_stance) {
+                out.push(format!("robot '{name}' on {label}: {w}"));
+            }
+        }
+    }
+    out
+}
+
+/// Runs `quadsim check`.
+pub fn check(a: CheckArgs) -> Result<(), CliError> {
+    let scn = load_scenario(&a.scenario).map_err(scenario_error)?;
+    let world = build_world(&scn, Overrides::default()).map_err(scenario_error)?;
+    for w in world
+        .warnings
+        .iter()
+        .chain(stability_warnings(&scn, &world).iter())
+    {
+        eprintln!("warning: {w}");
+    }
+    println!(
+        "{}: ok ({} robots, {} terrains, {} steps of {} s)",
+        a.scenario.display(),
+        world.robots.len(),
+        scn.file.terrains.len(),
+        world.steps,
+        world.dt_s
+    );
+    Ok(())
+}
+
+/// Runs `quadsim schema`: the JSON Schema of the scenario format.
+pub fn schema() -> Result<(), CliError> {
+    let s = schemars::schema_for!(crate::scenario::ScenarioFile);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&s).expect("schema serialises")
+    );
+    Ok(())
+}
+
+/// The result of a run, for the CLI and for tests.
+#[derive(Debug)]
+pub struct RunOutput {
+    /// `summary.json` as written.
+    pub summary: Value,
+    /// Where it was written.
+    pub out_dir: PathBuf,
+}
+
+/// Runs `quadsim run`.
+pub fn run(a: RunArgs) -> Result<(), CliError> {
+    let out = run_scenario(&a)?;
+    if !a.quiet {
+        print_table(&out.summary);
+        println!("wrote {}", out.out_dir.join("summary.json").display());
+    }
+    Ok(())
+}
+
+/// Loads, builds, runs and summarises a scenario; writes `summary.json`.
+pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
+    let scn = load_scenario(&a.scenario).map_err(scenario_error)?;
+    let mut world = build_world(&scn, overrides(a)?).map_err(scenario_error)?;
+    for w in world
+        .warnings
+        .iter()
+        .chain(stability_warnings(&scn, &world).iter())
+    {
+        eprintln!("warning: {w}");
+    }
+    let out_dir = a
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("runs").join(&scn.name));
+    std::fs::create_dir_all(&out_dir).map_err(|e| CliError::Io {
+        path: out_dir.display().to_string(),
+        source: e,
+    })?;
+
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(world.steps);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} steps, {per_sec}, eta {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        b.set_message(scn.name.clone());
+        b
+    };
+    let start = Instant::now();
+    let chunk = (world.steps / 200).max(1);
+    let mut done = 0;
+    while done < world.steps {
+        let n = chunk.min(world.steps - done);
+        world.sim.run(n);
+        done += n;
+        bar.set_position(done);
+        check_finite(&world)?;
+    }
+    bar.finish_and_clear();
+    let wall = start.elapsed().as_secs_f64();
+    let summary = summary_json(&scn, &world, wall, a.threads);
+    let path = out_dir.join("summary.json");
+    std::fs::write(
+        &path,
+        serde_json::to_string_pretty(&summary).expect("json") + "\n",
+    )
+    .map_err(|e| CliError::Io {
+        path: path.display().to_string(),
+        source: e,
+    })?;
+    Ok(RunOutput { summary, out_dir })
+}
+
+/// Stops with an error naming the robot, time and quantity when a state is not finite.
+fn check_finite(world: &World) -> Result<(), CliError> {
+    let t = world.sim.clock().time_s;
+    for (name, root) in &world.robots {
+        let Some(r) = world.sim.robot(*root) else {
+            continue;
+        };
+        let bad_q = r.state.q.iter().position(|x| !x.is_finite());
+        let bad_v = r.state.v.iter().position(|x| !x.is_finite());
+        if let Some(i) = bad_q.or(bad_v) {
+            let what = if bad_q.is_some() { "q" } else { "v" };
+            return Err(CliError::Diverged(format!(
+                "robot '{name}' diverged at t = {t:.4} s: {what}[{i}] is not finite (try a smaller world.dt_s or the rk4 integrator)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn opt(x: Option<f64>) -> Value {
+    x.map_or(Value::Null, |v| json!(v))
+}
+
+/// One robot's metrics as JSON (the keys of `scenarios/README.md`).
+pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
+    json!({
+        "name": name,
+        "fell": m.fell,
+        "fell_at_s": opt(m.fell_at_s),
+        "mean_forward_speed_mps": m.mean_forward_speed_mps,
+        "peak_forward_speed_mps": m.peak_forward_speed_mps,
+        "base_height_mean_m": m.base_height_mean_m,
+        "base_height_p2p_m": m.base_height_p2p_m,
+        "com_height_mean_m": m.com_height_mean_m,
+        "com_height_p2p_m": m.com_height_p2p_m,
+        "roll_range_rad": m.roll_range_rad,
+        "pitch_range_rad": m.pitch_range_rad,
+        "yaw_range_rad": m.yaw_range_rad,
+        "joint_rms_error_rad": opt(m.joint_rms_error_rad),
+        "max_foot_force_n": m.max_foot_force_n,
+        "energy_j": m.energy_j,
+        "energy_per_step_j": opt(m.energy_per_step_j),
+        "steps": m.steps,
+        "min_stability_margin_m": opt(m.min_stability_margin_m),
+        "distance_m": m.distance_m,
+    })
+}
+
+/// `summary.json`: deterministic fields, then `timing` (the only wall-clock part).
+pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: usize) -> Value {
+    let clock = world.sim.clock();
+    let robots: Vec<Value> = world
+        .robots
+        .iter()
+        .filter_map(|(name, root)| {
+            world
+                .sim
+                .robot(*root)
+                .map(|r| metrics_json(name, &r.run.metrics.summary()))
+        })
+        .collect();
+    let sha = Sha256::digest(scn.source.as_bytes());
+    let used_threads = world
+        .sim
+        .world
+        .resource::<quadsim_components::SimThreadPool>()
+        .threads();
+    let _ = threads;
+    json!({
+        "format_version": SUMMARY_FORMAT_VERSION,
+        "scenario": scn.name,
+        "sim_time_s": clock.time_s,
+        "steps": clock.step,
+        "dt_s": world.dt_s,
+        "seed": world.seed,
+        "quadsim_version": env!("CARGO_PKG_VERSION"),
+        "git_commit": env!("QUADSIM_GIT_COMMIT"),
+        "scenario_sha256": format!("{sha:x}"),
+        "integrator": match scn.file.world.integrator {
+            crate::scenario::format::IntegratorSpec::SemiImplicitEuler => "semi_implicit_euler",
+            crate::scenario::format::IntegratorSpec::Rk4 => "rk4",
+        },
+        "controller_rate_hz": scn.file.world.controller_rate_hz,
+        "robots": robots,
+        "timing": {
+            "wall_time_s": wall_time_s,
+            "real_time_factor": if wall_time_s > 0.0 { clock.time_s / wall_time_s } else { 0.0 },
+            "threads": used_threads,
+        },
+    })
+}
+
+/// Prints the metrics table (one column per robot).
+pub fn print_table(summary: &Value) {
+    let robots = summary["robots"].as_array().cloned().unwrap_or_default();
+    let rows: [(&str, &str); 14] = [
+        ("fell", "fell"),
+        ("mean forward speed (m/s)", "mean_forward_speed_mps"),
+        ("peak forward speed (m/s)", "peak_forward_speed_mps"),
+        ("base height mean (m)", "base_height_mean_m"),
+        ("base height p2p (m)", "base_height_p2p_m"),
+        ("CoM height mean (m)", "com_height_mean_m"),
+        ("CoM height p2p (m)", "com_height_p2p_m"),
+        ("roll range (rad)", "roll_range_rad"),
+        ("pitch range (rad)", "pitch_range_rad"),
+        ("joint RMS error (rad)", "joint_rms_error_rad"),
+        ("max foot force (N)", "max_foot_force_n"),
+        ("energy (J)", "energy_j"),
+        ("min stability margin (m)", "min_stability_margin_m"),
+        ("distance (m)", "distance_m"),
+    ];
+    let fmt = |v: &Value| match v {
+        Value::Null => "-".to_string(),
+        Value::Bool(b) => b.to_string(),
+        Value::Number(n) => format!("{:.4}", n.as_f64().unwrap_or(f64::NAN)),
+        Value::Array(a) => format!(
+            "[{}]",
+            a.iter()
+                .map(|x| format!("{:.3}", x.as_f64().unwrap_or(f64::NAN)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        other => other.to_string(),
+    };
+    print!("{:<26}", "metric");
+    for r in &robots {
+        print!(" {:>18}", r["name"].as_str().unwrap_or("?"));
+    }
+    println!();
+    for (label, key) in rows {
+        print!("{label:<26}");
+        for r in &robots {
+            print!(" {:>18}", fmt(&r[key]));
+        }
+        println!();
+    }
+    let t = &summary["timing"];
+    println!(
+        "simulated {:.3} s in {:.3} s wall ({:.1}x real time, {} threads)",
+        summary["sim_time_s"].as_f64().unwrap_or(0.0),
+        t["wall_time_s"].as_f64().unwrap_or(0.0),
+        t["real_time_factor"].as_f64().unwrap_or(0.0),
+        t["threads"]
+    );
+}

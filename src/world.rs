@@ -1,0 +1,461 @@
+//! Builds a simulation world from a validated [`Scenario`]: terrain entities,
+//! robot entities with their start state, contact points, controller, fall
+//! criteria and metrics, and the scheduled events.
+//!
+//! Randomness derives from `(world seed, name)` only ([`stream_seed`]), so the
+//! order of robots or terrains in the file changes nothing.
+
+use std::path::Path;
+
+use bevy_ecs::prelude::Entity;
+use glam::{DQuat, DVec3};
+use quadsim_components::{
+    ControlRate, Controller, DefaultGroundPlane, FallCriteria, Push, SimConfig, Terrain,
+};
+use quadsim_engine::contact::{ContactKind, ContactPoint, ContactState};
+use quadsim_engine::control::joint_pd::{JointPd, bandwidth_gains, static_stance_torques};
+use quadsim_engine::description::{RobotDescription, Shape};
+use quadsim_engine::integrate::{Integrator, State};
+use quadsim_engine::metrics::MetricsAccumulator;
+use quadsim_engine::model::BaseKind;
+use quadsim_engine::terrain::{DefaultGround, Terrain as _, TerrainUnion};
+use quadsim_engine::{Data, Model, robots};
+use quadsim_systems::Simulation;
+
+use crate::scenario::format::IntegratorSpec;
+use crate::scenario::spans::path_key;
+use crate::scenario::{Locator, Scenario, ScenarioError};
+use crate::terrain_spec::{ground_material, terrain_patch};
+use crate::urdf::{UrdfOptions, load_urdf};
+
+/// A world ready to run.
+#[derive(Debug)]
+pub struct World {
+    /// The simulation.
+    pub sim: Simulation,
+    /// Robot names and root entities, in file order.
+    pub robots: Vec<(String, Entity)>,
+    /// Steps to run.
+    pub steps: u64,
+    /// Step length (s).
+    pub dt_s: f64,
+    /// The world seed used.
+    pub seed: u64,
+    /// Warnings found while building (printed by `check` and `run`).
+    pub warnings: Vec<String>,
+}
+
+/// A 64-bit seed for the random stream named `name` under `world_seed`
+/// (FNV-1a over the seed's bytes and the name): independent of file order.
+pub fn stream_seed(world_seed: u64, name: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in world_seed.to_le_bytes().iter().chain(name.as_bytes()) {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// Options that override the scenario.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Overrides {
+    /// Simulated duration (s).
+    pub duration_s: Option<f64>,
+    /// World seed.
+    pub seed: Option<u64>,
+    /// Worker threads (0: one per core).
+    pub threads: usize,
+}
+
+/// Builds the world. Errors name the scenario file, line and key path.
+pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError> {
+    let loc = Locator {
+        path: &scn.path,
+        src: &scn.source,
+    };
+    let f = &scn.file;
+    let w = &f.world;
+    let seed = ov.seed.unwrap_or(w.seed);
+    let config = SimConfig {
+        dt_s: w.dt_s,
+        integrator: match w.integrator {
+            IntegratorSpec::SemiImplicitEuler => Integrator::SemiImplicitEuler,
+            IntegratorSpec::Rk4 => Integrator::Rk4,
+        },
+        gravity: DVec3::from_array(w.gravity_mps2),
+        ..SimConfig::default()
+    };
+    let mut sim =
+        Simulation::new(config, ov.threads).map_err(|e| loc.at("", format!("--threads: {e}")))?;
+    let every = (1.0 / (w.dt_s * w.controller_rate_hz)).round().max(1.0) as u64;
+    sim.world
+        .insert_resource(ControlRate { every_steps: every });
+
+    // Terrains (entities) and the default ground, compiled into the union.
+    let base_dir = scn.path.parent().unwrap_or(Path::new("."));
+    for (i, t) in f.terrains.iter().enumerate() {
+        let patch = terrain_patch(
+            &loc,
+            &format!("terrains[{i}]"),
+            t,
+            stream_seed(seed, &t.name),
+            base_dir,
+        )?;
+        sim.world.spawn(Terrain {
+            name: t.name.clone(),
+            patch,
+        });
+    }
+    let plane = match &w.default_ground {
+        Some(g) => Some(DefaultGround {
+            height_m: w.default_ground_height_m,
+            material: ground_material(&loc, "world.default_ground", g)?,
+        }),
+        None => None,
+    };
+    sim.world.insert_resource(DefaultGroundPlane(plane));
+    sim.compile();
+    let ground = sim.world.resource::<quadsim_components::Ground>().0.clone();
+
+    let mut robots_out = Vec::new();
+    let mut warnings = Vec::new();
+    for (i, r) in f.robots.iter().enumerate() {
+        let p = format!("robots[{i}]");
+        let (mut desc, warn) = robot_description(&loc, &p, r, base_dir)?;
+        warnings.extend(warn.into_iter().map(|w| format!("{p} ('{}'): {w}", r.name)));
+        if let Some(feet) = &r.feet {
+            desc.feet = feet.clone();
+        }
+        desc.name = r.name.clone();
+        let model = Model::from_description(&desc, BaseKind::Floating)
+            .map_err(|e| loc.at(&format!("{p}.model"), format!("'{}': {e}", r.model)))?;
+        if model.feet.is_empty() {
+            return Err(loc.at(
+                &format!("{p}.model"),
+                "the robot has no feet (no leaf links); name them with `feet`",
+            ));
+        }
+        let nj = model.nv - 6;
+        let joints = match &r.start_joints_rad {
+            Some(j) if j.len() != nj => {
+                return Err(loc.at(
+                    &format!("{p}.start_joints_rad"),
+                    format!("expected {nj} angles, got {}", j.len()),
+                ));
+            }
+            Some(j) => j.clone(),
+            None => robots::nominal_stance(&r.model)
+                .filter(|s| s.len() == nj)
+                .unwrap_or_else(|| vec![0.0; nj]),
+        };
+        let stance_height = robots::stance_base_height_m(&desc, &joints)
+            .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
+        let origin = r
+            .terrain
+            .as_ref()
+            .and_then(|t| f.terrains.iter().find(|x| &x.name == t))
+            .map_or(DVec3::ZERO, |t| DVec3::from_array(t.origin_m));
+        let start = r
+            .start_position_m
+            .map(DVec3::from_array)
+            .unwrap_or(DVec3::new(0.0, 0.0, stance_height));
+        let xy = origin.truncate() + start.truncate();
+        let ground_z = ground.height(xy.x, xy.y).ok_or_else(|| {
+            loc.at(
+                &format!("{p}.start_position_m"),
+                format!("no ground beneath ({:.3}, {:.3}): add a terrain there or a world.default_ground", xy.x, xy.y),
+            )
+        })?;
+        let yaw = r.start_yaw_deg.to_radians();
+        let quat = DQuat::from_rotation_z(yaw);
+        let mut q = vec![
+            xy.x,
+            xy.y,
+            ground_z + start.z,
+            quat.x,
+            quat.y,
+            quat.z,
+            quat.w,
+        ];
+        q.extend_from_slice(&joints);
+
+        let points = contact_points(&model, &desc, &r.contact_points);
+        let n_feet = model.feet.len();
+        let controller = controller(&loc, &p, r, &model, &q, &points[..n_feet])?;
+        let root = sim
+            .spawn_robot(&desc)
+            .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
+        let mut pushes = Vec::new();
+        for (k, e) in f
+            .events
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.robot == r.name)
+        {
+            pushes.push(push_event(&loc, &format!("events[{k}]"), e, &model)?);
+        }
+        let sim_r = sim.robot_mut(root).expect("compiled");
+        sim_r.state = State {
+            q,
+            v: vec![0.0; model.nv],
+        };
+        sim_r.contact.states = vec![ContactState::default(); points.len()];
+        sim_r.contact.points = points;
+        sim_r.contact.pushes = pushes;
+        sim_r.run.controller = controller;
+        sim_r.run.n_feet = n_feet;
+        sim_r.run.fall = FallCriteria {
+            min_base_height_m: 0.5 * stance_height,
+            ..FallCriteria::default()
+        };
+        sim_r.run.metrics = MetricsAccumulator::new(yaw, 0.0);
+        robots_out.push((r.name.clone(), root));
+    }
+    sim.compile();
+    let steps = (ov.duration_s.unwrap_or(w.duration_s) / w.dt_s).round() as u64;
+    Ok(World {
+        sim,
+        robots: robots_out,
+        steps,
+        dt_s: w.dt_s,
+        seed,
+        warnings,
+    })
+}
+
+/// The robot's description: a built-in with parameter overrides, or a URDF
+/// (relative to the scenario file).
+fn robot_description(
+    loc: &Locator<'_>,
+    p: &str,
+    r: &crate::scenario::format::RobotSpec,
+    base_dir: &Path,
+) -> Result<(RobotDescription, Vec<String>), ScenarioError> {
+    if robots::builtin_names().contains(&r.model.as_str()) {
+        let overrides: Vec<(&str, f64)> = r.params.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+        return robots::builtin_with(&r.model, &overrides)
+            .map(|d| (d, Vec::new()))
+            .map_err(|e| {
+                let key = r.params.keys().find(|k| e.to_string().contains(k.as_str()));
+                match key {
+                    Some(k) => loc.at(&format!("{p}.params.{}", path_key(k)), e.to_string()),
+                    None => loc.at(&format!("{p}.params"), e.to_string()),
+                }
+            });
+    }
+    let path = base_dir.join(&r.model);
+    if !path.is_file() {
+        return Err(loc.at(
+            &format!("{p}.model"),
+            format!(
+                "unknown model '{}': not a built-in ({}) and no file {}",
+                r.model,
+                robots::builtin_names().join(", "),
+                path.display()
+            ),
+        ));
+    }
+    if !r.params.is_empty() {
+        return Err(loc.at(
+            &format!("{p}.params"),
+            "parameter overrides apply to built-in models only",
+        ));
+    }
+    let robot = load_urdf(&path, &UrdfOptions::default())
+        .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
+    Ok((robot.description, robot.warnings))
+}
+
+/// Feet first (in the model's foot order), then knees and torso corners when asked.
+fn contact_points(model: &Model, desc: &RobotDescription, extra: &[String]) -> Vec<ContactPoint> {
+    let mut points = ContactPoint::feet(model, desc);
+    if extra.iter().any(|e| e == "knees") {
+        for b in 1..model.nbodies {
+            if model.joint_name[b].contains("knee") {
+                points.push(ContactPoint::new(b, DVec3::ZERO, 0.0, ContactKind::Knee));
+            }
+        }
+    }
+    if extra.iter().any(|e| e == "torso") {
+        let root = desc.root_link();
+        let cuboid = root.and_then(|l| {
+            l.collision.iter().find_map(|g| match g.shape {
+                Shape::Box { size_m } => Some((g.origin, size_m)),
+                _ => None,
+            })
+        });
+        if let Some((origin, size)) = cuboid {
+            for sx in [-0.5, 0.5] {
+                for sy in [-0.5, 0.5] {
+                    for sz in [-0.5, 0.5] {
+                        let c = origin.transform_point(DVec3::new(
+                            sx * size.x,
+                            sy * size.y,
+                            sz * size.z,
+                        ));
+                        points.push(ContactPoint::new(0, c, 0.0, ContactKind::Torso));
+                    }
+                }
+            }
+        }
+    }
+    points
+}
+
+fn controller(
+    loc: &Locator<'_>,
+    p: &str,
+    r: &crate::scenario::format::RobotSpec,
+    model: &Model,
+    q: &[f64],
+    feet: &[ContactPoint],
+) -> Result<Controller, ScenarioError> {
+    let c = &r.controller;
+    let get = |k: &str, d: f64| {
+        c.params
+            .get(k)
+            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+            .unwrap_or(d)
+    };
+    match c.kind.as_deref().unwrap_or("none") {
+        "none" => Ok(Controller::None),
+        "joint_pd" => {
+            let nj = model.nv - 6;
+            let ff = match c
+                .params
+                .get("gravity_compensation")
+                .and_then(|v| v.as_str())
+                .unwrap_or("none")
+            {
+                "none" => vec![0.0; nj],
+                "static" => {
+                    let mut data = Data::new(model);
+                    let pts: Vec<(usize, DVec3)> =
+                        feet.iter().map(|f| (f.body, f.point_in_body)).collect();
+                    static_stance_torques(model, &mut data, q, &pts)
+                }
+                other => {
+                    return Err(loc.at(
+                        &format!("{p}.controller.gravity_compensation"),
+                        format!("unknown value '{other}' (none, static)"),
+                    ));
+                }
+            };
+            let mut data = Data::new(model);
+            let (bkp, bkd) = bandwidth_gains(
+                model,
+                &mut data,
+                q,
+                get("bandwidth_hz", 4.0),
+                get("damping_ratio", 1.0),
+            );
+            let kp = per_joint(
+                loc,
+                &format!("{p}.controller.kp_nm_per_rad"),
+                c.params.get("kp_nm_per_rad"),
+                bkp,
+            )?;
+            let kd = per_joint(
+                loc,
+                &format!("{p}.controller.kd_nms_per_rad"),
+                c.params.get("kd_nms_per_rad"),
+                bkd,
+            )?;
+            Ok(Controller::JointPd(JointPd {
+                kp_nm_per_rad: kp,
+                kd_nms_per_rad: kd,
+                target_rad: q[7..].to_vec(),
+                feedforward_nm: ff,
+            }))
+        }
+        other => Err(loc.at(
+            &format!("{p}.controller.kind"),
+            format!("controller kind '{other}' is not available"),
+        )),
+    }
+}
+
+/// A gain given as one number for every joint or one per joint; `default`
+/// (one per joint) when absent.
+fn per_joint(
+    loc: &Locator<'_>,
+    path: &str,
+    v: Option<&toml::Value>,
+    default: Vec<f64>,
+) -> Result<Vec<f64>, ScenarioError> {
+    let n = default.len();
+    let as_num = |x: &toml::Value| x.as_float().or(x.as_integer().map(|i| i as f64));
+    match v {
+        None => Ok(default),
+        Some(toml::Value::Array(a)) => {
+            let vals: Vec<f64> = a.iter().filter_map(as_num).collect();
+            if vals.len() != n || a.len() != n {
+                return Err(loc.at(
+                    path,
+                    format!(
+                        "expected one number or {n} numbers (one per joint), got {}",
+                        a.len()
+                    ),
+                ));
+            }
+            if vals.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+                return Err(loc.at(path, "gains must be finite and ≥ 0"));
+            }
+            Ok(vals)
+        }
+        Some(x) => match as_num(x) {
+            Some(g) if g.is_finite() && g >= 0.0 => Ok(vec![g; n]),
+            _ => Err(loc.at(path, "must be a number ≥ 0 or an array of them")),
+        },
+    }
+}
+
+fn push_event(
+    loc: &Locator<'_>,
+    p: &str,
+    e: &crate::scenario::format::EventSpec,
+    model: &Model,
+) -> Result<Push, ScenarioError> {
+    let vec3 = |k: &str| -> Option<DVec3> {
+        let a = e.params.get(k)?.as_array()?;
+        let v: Vec<f64> = a
+            .iter()
+            .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+            .collect();
+        (v.len() == 3).then(|| DVec3::new(v[0], v[1], v[2]))
+    };
+    let force = vec3("force_n")
+        .ok_or_else(|| loc.at(&format!("{p}.force_n"), "needs three numbers (N)"))?;
+    let duration = e
+        .params
+        .get("duration_s")
+        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        .unwrap_or(0.0);
+    let (body, placement) = match e.params.get("body").and_then(|v| v.as_str()) {
+        None => (0, quadsim_engine::spatial::Transform::IDENTITY),
+        Some(name) => {
+            let fi = model
+                .frame_index(name)
+                .ok_or_else(|| loc.at(&format!("{p}.body"), format!("unknown link '{name}'")))?;
+            (model.frames[fi].body, model.frames[fi].placement)
+        }
+    };
+    let point = placement.transform_point(vec3("point_m").unwrap_or(DVec3::ZERO));
+    Ok(Push {
+        start_s: e.t_s,
+        end_s: e.t_s + duration,
+        body,
+        point_in_body_m: point,
+        force_n: force,
+    })
+}
+
+/// The world's ground union for checks (`quadsim check`).
+pub fn ground_of(world: &World) -> std::sync::Arc<TerrainUnion> {
+    world
+        .sim
+        .world
+        .resource::<quadsim_components::Ground>()
+        .0
+        .clone()
+}

@@ -1,0 +1,46 @@
+//! Metrics recorded every step (full rate) in the `Publish` stage, from the
+//! step's [`Observation`](quadsim_components::Observation) and the actuator
+//! torques applied during the step.
+
+use bevy_ecs::prelude::*;
+use quadsim_components::{RobotBatch, RobotSim, SimConfig, SimThreadPool};
+use quadsim_engine::metrics::StepSample;
+
+/// Records one step of metrics for every robot.
+pub fn record_metrics(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, config: Res<SimConfig>) {
+    let dt = config.dt_s;
+    let saturate = config.passive.saturation;
+    let sims = &mut batch.sims;
+    pool.for_each(sims, |sim| record_robot(sim, dt, saturate));
+}
+
+/// One robot's sample: the state at the step's start and the (saturated)
+/// actuator torques that acted over the step.
+pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
+    let RobotSim { model, tau_actuator, run, .. } = sim;
+    let nv0 = model.base_nv();
+    let nj = model.nv - nv0;
+    run.tau_joints.resize(nj, 0.0);
+    for j in 0..nj {
+        let lim = if saturate { model.effort_limit[nv0 + j] } else { f64::INFINITY };
+        run.tau_joints[j] = tau_actuator[nv0 + j].clamp(-lim, lim);
+    }
+    let obs = &run.observation;
+    let sample = StepSample {
+        t_s: obs.t_s,
+        dt_s,
+        base_position_m: obs.base.trans,
+        base_rotation: obs.base.rot,
+        base_height_above_ground_m: obs.base_height_above_ground_m,
+        com_m: obs.com_m,
+        com_velocity_mps: obs.com_velocity_mps,
+        com_height_above_ground_m: obs.com_height_above_ground_m,
+        q_joints: &obs.q_joints,
+        qd_joints: &obs.qd_joints,
+        tau_joints: &run.tau_joints,
+        q_desired: run.controller.joint_targets(),
+        feet: &obs.feet,
+        fallen: obs.fallen,
+    };
+    run.metrics.record(&sample);
+}

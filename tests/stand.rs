@@ -1,0 +1,87 @@
+//! quad16 standing and dropped on Study A's ground presets (issue 3):
+//! standing drifts ≤ 1 mm over 10 s and sinks by what the ground stiffness
+//! predicts (Σ penetrations = m g / k for the linear law, whatever the load
+//! split), the support margin is half the stance width (0.150 m), and a
+//! passive quad16 dropped on each preset stays finite with both integrators.
+
+use std::path::Path;
+
+use quadsim::scenario::parse_scenario;
+use quadsim::world::{Overrides, build_world};
+
+const PRESETS: [(&str, f64); 4] = [("concrete", 100_000.0), ("grass", 50_000.0), ("mud", 20_000.0), ("sand", 30_000.0)];
+
+fn stand_scenario(ground: &str, integrator: &str, controller: &str) -> String {
+    format!(
+        r#"format_version = 1
+[world]
+dt_s = 0.0005
+integrator = "{integrator}"
+duration_s = 10.0
+controller_rate_hz = 2000
+default_ground = "{ground}"
+
+[[robots]]
+name = "rex"
+model = "quad16"
+{controller}
+"#
+    )
+}
+
+const PD: &str = r#"[robots.controller]
+kind = "joint_pd"
+kp_nm_per_rad = [300.0, 300.0, 300.0, 100.0, 300.0, 300.0, 300.0, 100.0, 300.0, 300.0, 300.0, 100.0, 300.0, 300.0, 300.0, 100.0]
+kd_nms_per_rad = [5.0, 5.0, 5.0, 0.5, 5.0, 5.0, 5.0, 0.5, 5.0, 5.0, 5.0, 0.5, 5.0, 5.0, 5.0, 0.5]
+gravity_compensation = "static"
+"#;
+
+#[test]
+fn quad16_stands_on_every_preset() {
+    for (ground, k) in PRESETS {
+        let scn = parse_scenario(Path::new("stand.toml"), stand_scenario(ground, "semi_implicit_euler", PD)).unwrap();
+        let mut w = build_world(&scn, Overrides { threads: 1, ..Default::default() }).unwrap();
+        let root = w.robots[0].1;
+        let start = w.sim.robot(root).unwrap().state.q[..3].to_vec();
+        w.sim.run(w.steps);
+        let r = w.sim.robot(root).unwrap();
+        let m = r.run.metrics.summary();
+        assert!(!m.fell, "{ground}: fell");
+        // drift of the base origin in the horizontal plane over the 10 s
+        let q = &r.state.q;
+        let drift = ((q[0] - start[0]).powi(2) + (q[1] - start[1]).powi(2)).sqrt();
+        assert!(drift <= 1e-3, "{ground}: drifted {drift:.6} m");
+        // static sink: Σ δᵢ = Σ fᵢ / k = m g / k (linear law)
+        let sink: f64 = r.contact.states.iter().map(|s| s.penetration_m).sum();
+        let expected = r.model.total_mass * 9.81 / k;
+        let rel = (sink - expected).abs() / expected;
+        assert!(rel <= 0.02, "{ground}: Σ sink {sink:.6} m vs m g / k = {expected:.6} m ({:.2} %)", rel * 100.0);
+        // standing on four feet at the nominal stance: the CoM is over the
+        // centre of a 0.5 × 0.3 m rectangle (feet 15 mm behind the hips)
+        let margin = m.min_stability_margin_m.unwrap();
+        assert!((margin - 0.150).abs() < 2e-3, "{ground}: margin {margin}");
+    }
+}
+
+#[test]
+fn passive_quad16_dropped_on_every_preset_stays_finite() {
+    for integrator in ["semi_implicit_euler", "rk4"] {
+        for (ground, _) in PRESETS {
+            let src = stand_scenario(ground, integrator, "").replace("duration_s = 10.0", "duration_s = 2.0")
+                + "start_position_m = [0.0, 0.0, 0.8]\ncontact_points = [\"knees\", \"torso\"]\n";
+            let scn = parse_scenario(Path::new("drop.toml"), src).unwrap();
+            let mut w = build_world(&scn, Overrides { threads: 1, ..Default::default() }).unwrap();
+            w.sim.run(w.steps);
+            let r = w.sim.robot(w.robots[0].1).unwrap();
+            assert!(
+                r.state.q.iter().chain(&r.state.v).all(|x| x.is_finite()),
+                "{ground} with {integrator}: state not finite"
+            );
+            // it collapsed onto the ground (limp joints) and rests on its torso
+            // corners and knees above the ground, not through it
+            let z = r.state.q[2];
+            assert!(z > 0.0 && z < 0.8, "{ground} with {integrator}: base at z = {z}");
+            assert!(r.run.observation.fallen, "{ground} with {integrator}: a limp robot must register a fall");
+        }
+    }
+}
