@@ -13,9 +13,68 @@ use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::spatial::Transform;
 use quadsim_engine::terrain::{
-    Incline, StairDirection, Stairs, TerrainPatch, TerrainShape, TerrainUnion,
+    BoxObstacles, BoxSpec, HeightField, Incline, NoiseKind, Rough, StairDirection, Stairs,
+    SteppingStones, TerrainPatch, TerrainShape, TerrainUnion, Trench,
 };
 use quadsim_engine::{BaseKind, Data, Model};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+/// The system allocator, counting the allocations of threads that opted in
+/// (so tests running in parallel do not disturb each other).
+struct CountingAlloc;
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+fn note_allocation() {
+    // `try_with`: thread-locals may be gone while a thread is torn down.
+    let _ = COUNTING.try_with(|on| {
+        if on.get() {
+            let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+        }
+    });
+}
+
+#[expect(
+    unsafe_code,
+    reason = "a GlobalAlloc impl is unsafe by definition; it forwards to System"
+)]
+unsafe impl GlobalAlloc for CountingAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_allocation();
+        // SAFETY: forwarded unchanged to the system allocator.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note_allocation();
+        // SAFETY: forwarded unchanged to the system allocator.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_allocation();
+        // SAFETY: forwarded unchanged to the system allocator.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: forwarded unchanged to the system allocator.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOC: CountingAlloc = CountingAlloc;
+
+/// Number of allocations the current thread makes while running `f`.
+fn allocations_in(f: impl FnOnce()) -> usize {
+    COUNT.with(|c| c.set(0));
+    COUNTING.with(|on| on.set(true));
+    f();
+    COUNTING.with(|on| on.set(false));
+    COUNT.with(|c| c.get())
+}
 
 const G: f64 = 9.81;
 
@@ -407,4 +466,89 @@ fn feet_from_description_use_the_foot_sphere() {
     assert_eq!(feet[0].radius_m, 0.03);
     let bad = [ContactPoint::new(3, DVec3::ZERO, 0.01, ContactKind::Knee)];
     assert!(ContactPoint::validate(&bad, &model).is_err());
+}
+
+/// Contact stepping allocates nothing: a sphere rolling and bouncing across
+/// a union of every kind of terrain (RK4 with contact forces at every stage,
+/// `update_after_step` after each step) makes no allocation once set up.
+#[test]
+fn contact_steps_allocate_nothing() {
+    let mat = GroundPreset::Sand.material();
+    let at = |shape, x: f64| TerrainPatch::new(shape, DVec3::new(x, 0.0, 0.0), 0.3, mat).unwrap();
+    let size = DVec2::splat(1.0);
+    let terrain = TerrainUnion::flat(0.0, GroundPreset::Concrete.material())
+        .with(at(
+            TerrainShape::Stairs(Stairs::new(StairDirection::Up, 0.05, 0.2, 3, 1.0, 0.1).unwrap()),
+            0.2,
+        ))
+        .with(at(
+            TerrainShape::Trench(Trench::new(0.2, 0.1, size).unwrap()),
+            1.5,
+        ))
+        .with(at(
+            TerrainShape::HeightField(
+                HeightField::from_fn(20, 20, DVec2::splat(0.05), |x, y| {
+                    0.01 * (x * 9.0).sin() * y
+                })
+                .unwrap(),
+            ),
+            2.5,
+        ))
+        .with(at(
+            TerrainShape::Rough(
+                Rough::new(
+                    NoiseKind::Perlin {
+                        wavelength_m: 0.5,
+                        octaves: 3,
+                        persistence: 0.5,
+                    },
+                    0.01,
+                    3,
+                    size,
+                )
+                .unwrap(),
+            ),
+            3.5,
+        ))
+        .with(at(
+            TerrainShape::SteppingStones(
+                SteppingStones::new(4, 4, DVec2::splat(0.15), 0.05, 0.02, 0.5, 0.01, 2).unwrap(),
+            ),
+            4.5,
+        ))
+        .with(at(
+            TerrainShape::Boxes(
+                BoxObstacles::new(vec![BoxSpec {
+                    centre_m: DVec3::new(0.0, 0.0, 0.02),
+                    size_m: DVec3::splat(0.04),
+                    yaw_rad: 0.7,
+                }])
+                .unwrap(),
+            ),
+            5.5,
+        ));
+    let mut sim = Sim::sphere(2.0, 0.05, terrain);
+    sim.model.gravity = DVec3::new(0.0, 0.0, -G);
+    sim.step(1e-4);
+    let mut touched = [false; 7];
+    // drop the sphere, moving sideways, onto each patch and the default ground
+    let n = allocations_in(|| {
+        for (k, x) in [-0.5, 0.45, 1.45, 2.5, 3.5, 4.5, 5.5]
+            .into_iter()
+            .enumerate()
+        {
+            sim.set_pose(DVec3::new(x, 0.02, 0.15), DQuat::IDENTITY);
+            sim.state.v[..3].copy_from_slice(&[0.5, 0.2, -0.5]);
+            sim.states.fill(ContactState::default());
+            for _ in 0..3000 {
+                sim.step(1e-4);
+                touched[k] |= sim.states[0].in_contact;
+            }
+        }
+    });
+    assert_eq!(n, 0, "contact stepping allocated {n} times");
+    // control: the counter does see allocations
+    let control = allocations_in(|| drop(std::hint::black_box(Vec::<u8>::with_capacity(8))));
+    assert_eq!(control, 1);
+    assert!(touched.iter().all(|&t| t), "{touched:?}");
 }
