@@ -9,7 +9,12 @@ use std::path::Path;
 use quadsim::scenario::parse_scenario;
 use quadsim::world::{Overrides, build_world};
 
-const PRESETS: [(&str, f64); 4] = [("concrete", 100_000.0), ("grass", 50_000.0), ("mud", 20_000.0), ("sand", 30_000.0)];
+const PRESETS: [(&str, f64); 4] = [
+    ("concrete", 100_000.0),
+    ("grass", 50_000.0),
+    ("mud", 20_000.0),
+    ("sand", 30_000.0),
+];
 
 fn stand_scenario(ground: &str, integrator: &str, controller: &str) -> String {
     format!(
@@ -39,8 +44,19 @@ gravity_compensation = "static"
 #[test]
 fn quad16_stands_on_every_preset() {
     for (ground, k) in PRESETS {
-        let scn = parse_scenario(Path::new("stand.toml"), stand_scenario(ground, "semi_implicit_euler", PD)).unwrap();
-        let mut w = build_world(&scn, Overrides { threads: 1, ..Default::default() }).unwrap();
+        let scn = parse_scenario(
+            Path::new("stand.toml"),
+            stand_scenario(ground, "semi_implicit_euler", PD),
+        )
+        .unwrap();
+        let mut w = build_world(
+            &scn,
+            Overrides {
+                threads: 1,
+                ..Default::default()
+            },
+        )
+        .unwrap();
         let root = w.robots[0].1;
         let start = w.sim.robot(root).unwrap().state.q[..3].to_vec();
         w.sim.run(w.steps);
@@ -55,7 +71,11 @@ fn quad16_stands_on_every_preset() {
         let sink: f64 = r.contact.states.iter().map(|s| s.penetration_m).sum();
         let expected = r.model.total_mass * 9.81 / k;
         let rel = (sink - expected).abs() / expected;
-        assert!(rel <= 0.02, "{ground}: Σ sink {sink:.6} m vs m g / k = {expected:.6} m ({:.2} %)", rel * 100.0);
+        assert!(
+            rel <= 0.02,
+            "{ground}: Σ sink {sink:.6} m vs m g / k = {expected:.6} m ({:.2} %)",
+            rel * 100.0
+        );
         // standing on four feet at the nominal stance: the CoM is over the
         // centre of a 0.5 × 0.3 m rectangle (feet 15 mm behind the hips)
         let margin = m.min_stability_margin_m.unwrap();
@@ -67,10 +87,18 @@ fn quad16_stands_on_every_preset() {
 fn passive_quad16_dropped_on_every_preset_stays_finite() {
     for integrator in ["semi_implicit_euler", "rk4"] {
         for (ground, _) in PRESETS {
-            let src = stand_scenario(ground, integrator, "").replace("duration_s = 10.0", "duration_s = 2.0")
+            let src = stand_scenario(ground, integrator, "")
+                .replace("duration_s = 10.0", "duration_s = 2.0")
                 + "start_position_m = [0.0, 0.0, 0.8]\ncontact_points = [\"knees\", \"torso\"]\n";
             let scn = parse_scenario(Path::new("drop.toml"), src).unwrap();
-            let mut w = build_world(&scn, Overrides { threads: 1, ..Default::default() }).unwrap();
+            let mut w = build_world(
+                &scn,
+                Overrides {
+                    threads: 1,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
             w.sim.run(w.steps);
             let r = w.sim.robot(w.robots[0].1).unwrap();
             assert!(
@@ -80,8 +108,64 @@ fn passive_quad16_dropped_on_every_preset_stays_finite() {
             // it collapsed onto the ground (limp joints) and rests on its torso
             // corners and knees above the ground, not through it
             let z = r.state.q[2];
-            assert!(z > 0.0 && z < 0.8, "{ground} with {integrator}: base at z = {z}");
-            assert!(r.run.observation.fallen, "{ground} with {integrator}: a limp robot must register a fall");
+            assert!(
+                z > 0.0 && z < 0.8,
+                "{ground} with {integrator}: base at z = {z}"
+            );
+            assert!(
+                r.run.observation.fallen,
+                "{ground} with {integrator}: a limp robot must register a fall"
+            );
         }
     }
+}
+
+/// Each foot entity holds its contact state (issue 3): after a synced step the
+/// foot links' `FootContact` equal the packed contact states.
+#[test]
+fn foot_entities_hold_their_contact_state() {
+    use quadsim::components::{Foot, FootContact, Link};
+    let scn = parse_scenario(
+        Path::new("stand.toml"),
+        stand_scenario("concrete", "semi_implicit_euler", PD),
+    )
+    .unwrap();
+    let mut w = build_world(
+        &scn,
+        Overrides {
+            threads: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    w.sim.run(400);
+    w.sim.sync_link_poses();
+    let root = w.robots[0].1;
+    let (states, feet): (Vec<_>, Vec<String>) = {
+        let r = w.sim.robot(root).unwrap();
+        (
+            r.contact.states[..4].to_vec(),
+            r.model
+                .feet
+                .iter()
+                .map(|&f| r.model.frames[f].name.clone())
+                .collect(),
+        )
+    };
+    let mut q = w
+        .sim
+        .world
+        .query_filtered::<(&Link, &FootContact), bevy_ecs::prelude::With<Foot>>();
+    let mut seen = 0;
+    for (link, fc) in q.iter(&w.sim.world) {
+        let i = feet
+            .iter()
+            .position(|n| *n == link.name)
+            .expect("a foot of the model");
+        assert!(fc.in_contact, "{} in contact", link.name);
+        assert_eq!(fc.force_n, states[i].force_n);
+        assert_eq!(fc.penetration_m, states[i].penetration_m);
+        seen += 1;
+    }
+    assert_eq!(seen, 4);
 }

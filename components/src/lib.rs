@@ -58,7 +58,7 @@ pub use joint::{
     EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
     JointMotion, JointPlacement, VelocityLimit,
 };
-pub use link::{CenterOfMass, ComputedInertia, Foot, FootPoint, Inertia, Link, LinkPose, Mass};
+pub use link::{CenterOfMass, ComputedInertia, Foot, FootContact, FootPoint, Inertia, Link, LinkPose, Mass};
 pub use forces::{ContactForces, Ground, Push, Terrain};
 pub use run::{ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, RobotRun};
 pub use resources::{

@@ -40,8 +40,24 @@ impl Default for ComputedInertia {
 }
 
 /// Marks a foot link (a contact point for the ground model and the gait).
+/// Brings its [`FootContact`] along.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[require(FootContact)]
 pub struct Foot;
+
+/// A foot's contact state, copied from the packed simulation with the link
+/// poses (publish rate or on request). Output only.
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct FootContact {
+    /// The foot touches the ground.
+    pub in_contact: bool,
+    /// The contact slid (friction at the cone's limit) in the last step.
+    pub slipping: bool,
+    /// Penetration depth (m, ≥ 0).
+    pub penetration_m: f64,
+    /// Ground reaction force on the foot (N, world).
+    pub force_n: DVec3,
+}
 
 /// Contact point of a foot (m, link frame); absent: the link origin.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
