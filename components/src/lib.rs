@@ -54,13 +54,14 @@ pub use build::{
     spawn_link, spawn_robot, spawn_robot_with_base,
 };
 pub use collider::{Collider, ColliderOf, LinkColliders, LinkVisuals, Visual, VisualOf};
+pub use forces::{ContactForces, Ground, Push, Terrain};
 pub use joint::{
     EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
     JointMotion, JointPlacement, VelocityLimit,
 };
-pub use link::{CenterOfMass, ComputedInertia, Foot, FootContact, FootPoint, Inertia, Link, LinkPose, Mass};
-pub use forces::{ContactForces, Ground, Push, Terrain};
-pub use run::{ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, RobotRun};
+pub use link::{
+    CenterOfMass, ComputedInertia, Foot, FootContact, FootPoint, Inertia, Link, LinkPose, Mass,
+};
 pub use resources::{
     PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
     ThreadPoolError,
@@ -68,3 +69,4 @@ pub use resources::{
 pub use robot::{
     BelongsTo, CompileFailure, Robot, RobotBase, RobotIndex, RobotModelName, RobotParts,
 };
+pub use run::{ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, RobotRun};

@@ -65,7 +65,10 @@ pub struct FallCriteria {
 
 impl Default for FallCriteria {
     fn default() -> Self {
-        Self { max_tilt_rad: 60f64.to_radians(), min_base_height_m: 0.0 }
+        Self {
+            max_tilt_rad: 60f64.to_radians(),
+            min_base_height_m: 0.0,
+        }
     }
 }
 

@@ -19,8 +19,8 @@
 
 pub mod aba;
 pub mod com;
-pub mod control;
 pub mod contact;
+pub mod control;
 pub mod crba;
 pub mod data;
 pub mod description;

@@ -104,8 +104,14 @@ fn bandwidth_gains_scale_with_the_apparent_inertia() {
     // loop kp/M = ω², kd/M = 2ζω.
     use quadsim_engine::description::RobotBuilder;
     let d = RobotBuilder::new("p")
-        .link("base").mass(1.0).done()
-        .link("arm").mass(2.0).com(DVec3::new(0.0, 0.0, -0.5)).inertia(glam::DMat3::from_diagonal(DVec3::splat(0.01))).done()
+        .link("base")
+        .mass(1.0)
+        .done()
+        .link("arm")
+        .mass(2.0)
+        .com(DVec3::new(0.0, 0.0, -0.5))
+        .inertia(glam::DMat3::from_diagonal(DVec3::splat(0.01)))
+        .done()
         .revolute("j", "base", "arm", DVec3::ZERO, DVec3::Y)
         .build();
     let model = Model::from_description(&d, BaseKind::Fixed).unwrap();

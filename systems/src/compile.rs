@@ -43,7 +43,14 @@ pub fn build_compile_schedule() -> Schedule {
         ..Default::default()
     });
     schedule.set_executor(SingleThreadedExecutor::new());
-    schedule.add_systems((mark_dirty_robots, compile_dirty_robots, crate::ground::compile_ground).chain());
+    schedule.add_systems(
+        (
+            mark_dirty_robots,
+            compile_dirty_robots,
+            crate::ground::compile_ground,
+        )
+            .chain(),
+    );
     schedule
 }
 

@@ -13,7 +13,11 @@ use quadsim_engine::metrics::FootSample;
 use quadsim_engine::terrain::{Terrain as _, TerrainUnion};
 
 /// Updates contacts and observations of every robot, in parallel.
-pub fn update_contacts(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, clock: Res<SimClock>) {
+pub fn update_contacts(
+    mut batch: ResMut<RobotBatch>,
+    pool: Res<SimThreadPool>,
+    clock: Res<SimClock>,
+) {
     let t = clock.time_s;
     let sims = &mut batch.sims;
     pool.for_each(sims, |sim| observe_robot(sim, t));
@@ -26,7 +30,14 @@ pub fn height_above_ground(terrain: &TerrainUnion, p: DVec3) -> f64 {
 
 /// One robot: kinematics at `(q, v)`, contact update, observation, fall check.
 pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
-    let RobotSim { model, data, state, contact, run, .. } = sim;
+    let RobotSim {
+        model,
+        data,
+        state,
+        contact,
+        run,
+        ..
+    } = sim;
     forward_kinematics(model, data, &state.q, &state.v);
     update_after_step(&contact.points, data, &contact.terrain, &mut contact.states);
     contact.time_s = t_s;
@@ -48,7 +59,11 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
         let centre = data.body_point_world(p.body, p.point_in_body);
         *foot = FootSample {
             in_contact: s.in_contact,
-            position_m: if s.in_contact { centre - s.normal * p.radius_m } else { centre - DVec3::Z * p.radius_m },
+            position_m: if s.in_contact {
+                centre - s.normal * p.radius_m
+            } else {
+                centre - DVec3::Z * p.radius_m
+            },
             force_n: s.force_n,
         };
     }

@@ -26,7 +26,11 @@ pub fn control_robot(sim: &mut RobotSim) {
         Controller::None => sim.tau_actuator.fill(0.0),
         Controller::JointPd(pd) => {
             sim.tau_actuator[..nb].fill(0.0);
-            pd.compute(&sim.state.q[nq0..], &sim.state.v[nv0..], &mut sim.tau_actuator[nb..]);
+            pd.compute(
+                &sim.state.q[nq0..],
+                &sim.state.v[nv0..],
+                &mut sim.tau_actuator[nb..],
+            );
         }
     }
 }

@@ -18,8 +18,12 @@ pub fn compile_ground(
     mut ground: ResMut<Ground>,
     mut batch: ResMut<RobotBatch>,
 ) {
-    let changed = plane.is_changed() || removed.read().count() > 0 || terrains.iter().any(|t| t.is_changed());
-    let stale = batch.sims.iter().any(|s| !Arc::ptr_eq(&s.contact.terrain, &ground.0));
+    let changed =
+        plane.is_changed() || removed.read().count() > 0 || terrains.iter().any(|t| t.is_changed());
+    let stale = batch
+        .sims
+        .iter()
+        .any(|s| !Arc::ptr_eq(&s.contact.terrain, &ground.0));
     if changed {
         let mut list: Vec<&Terrain> = terrains.iter().map(|t| t.into_inner()).collect();
         list.sort_by(|a, b| a.name.cmp(&b.name));

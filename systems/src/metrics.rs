@@ -7,7 +7,11 @@ use quadsim_components::{RobotBatch, RobotSim, SimConfig, SimThreadPool};
 use quadsim_engine::metrics::StepSample;
 
 /// Records one step of metrics for every robot.
-pub fn record_metrics(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, config: Res<SimConfig>) {
+pub fn record_metrics(
+    mut batch: ResMut<RobotBatch>,
+    pool: Res<SimThreadPool>,
+    config: Res<SimConfig>,
+) {
     let dt = config.dt_s;
     let saturate = config.passive.saturation;
     let sims = &mut batch.sims;
@@ -17,12 +21,21 @@ pub fn record_metrics(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, c
 /// One robot's sample: the state at the step's start and the (saturated)
 /// actuator torques that acted over the step.
 pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
-    let RobotSim { model, tau_actuator, run, .. } = sim;
+    let RobotSim {
+        model,
+        tau_actuator,
+        run,
+        ..
+    } = sim;
     let nv0 = model.base_nv();
     let nj = model.nv - nv0;
     run.tau_joints.resize(nj, 0.0);
     for j in 0..nj {
-        let lim = if saturate { model.effort_limit[nv0 + j] } else { f64::INFINITY };
+        let lim = if saturate {
+            model.effort_limit[nv0 + j]
+        } else {
+            f64::INFINITY
+        };
         run.tau_joints[j] = tau_actuator[nv0 + j].clamp(-lim, lim);
     }
     let obs = &run.observation;

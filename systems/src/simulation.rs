@@ -3,9 +3,9 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::system::RunSystemOnce;
 use quadsim_components::{
-    ControlRate, DefaultGroundPlane, Ground,
-    CompileError, CompileFailure, PoseSync, RobotBatch, RobotIndex, RobotSim, SimClock, SimConfig,
-    SimThreadPool, ThreadPoolError, spawn_robot_with_base,
+    CompileError, CompileFailure, ControlRate, DefaultGroundPlane, Ground, PoseSync, RobotBatch,
+    RobotIndex, RobotSim, SimClock, SimConfig, SimThreadPool, ThreadPoolError,
+    spawn_robot_with_base,
 };
 use quadsim_engine::BaseKind;
 use quadsim_engine::description::RobotDescription;

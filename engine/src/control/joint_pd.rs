@@ -38,13 +38,22 @@ impl JointPd {
 /// about the axis with the rest of the robot held). Uniform gains would be
 /// unstable on a light distal link (quad16's foot: Mᵢᵢ ≈ 6e-4 kg·m²) under a
 /// sampled controller; scaling by Mᵢᵢ keeps `kd·T/Mᵢᵢ = 2ζωT` the same for all.
-pub fn bandwidth_gains(model: &Model, data: &mut Data, q: &[f64], bandwidth_hz: f64, damping_ratio: f64) -> (Vec<f64>, Vec<f64>) {
+pub fn bandwidth_gains(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    bandwidth_hz: f64,
+    damping_ratio: f64,
+) -> (Vec<f64>, Vec<f64>) {
     let m = crate::crba::crba(model, data, q);
     let w = std::f64::consts::TAU * bandwidth_hz;
     let nv = model.nv;
     let b = model.base_nv();
     let diag: Vec<f64> = (b..nv).map(|i| m[i * nv + i]).collect();
-    (diag.iter().map(|mi| mi * w * w).collect(), diag.iter().map(|mi| 2.0 * damping_ratio * mi * w).collect())
+    (
+        diag.iter().map(|mi| mi * w * w).collect(),
+        diag.iter().map(|mi| 2.0 * damping_ratio * mi * w).collect(),
+    )
 }
 
 /// Joint torques that hold a floating-base robot still at configuration `q`
