@@ -25,6 +25,7 @@ pub mod crba;
 pub mod data;
 pub mod description;
 pub mod energy;
+pub mod gait;
 pub mod integrate;
 pub mod jacobian;
 pub mod kinematics;
