@@ -5,7 +5,6 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use quadsim_engine::contact::stability::check_stability;
 use quadsim_engine::metrics::MetricsSummary;
 use serde_json::{Value, json};
 use sha2::{Digest, Sha256};
@@ -66,8 +65,12 @@ fn overrides(a: &RunArgs) -> Result<Overrides, CliError> {
 }
 
 /// Warnings about the scenario that do not stop it: contact stability at this
-/// time step for each robot's foot mass on each ground it may touch.
+/// time step on each ground a robot may touch, for two effective masses per
+/// robot — its mass shared by its feet (the slow mode) and each foot point's
+/// apparent masses at the start pose (normal and lightest tangential; the fast
+/// modes, e.g. a foot rolling about its ankle).
 pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
+    use quadsim_engine::contact::stability::{check_stability_split, contact_apparent_masses};
     let mut out = Vec::new();
     let ground = crate::world::ground_of(world);
     let mut materials: Vec<(String, quadsim_engine::contact::GroundMaterial)> = Vec::new();
@@ -75,20 +78,55 @@ pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
         materials.push(("world.default_ground".into(), d.material));
     }
     for (i, p) in ground.patches().iter().enumerate() {
-        materials.push((format!("terrain {i}"), *p.material()));
+        let name = scn.file.terrains.get(i).map_or_else(
+            || format!("terrain {i}"),
+            |t| format!("terrain '{}'", t.name),
+        );
+        materials.push((name, *p.material()));
     }
+    let dt = scn.file.world.dt_s;
     for (name, root) in &world.robots {
         let Some(sim) = world.sim.robot(*root) else {
             continue;
         };
-        // The effective mass a foot's spring acts on: the robot's mass shared by
-        // its feet in stance (the slowest mode) and the lightest foot link alone
-        // (the fastest).
         let n = sim.run.n_feet.max(1) as f64;
-        let m_stance = sim.model.total_mass / n;
+        let mut masses = vec![(
+            "its weight shared by its feet".to_string(),
+            sim.model.total_mass / n,
+            sim.model.total_mass / n,
+        )];
+        let mut data = quadsim_engine::Data::new(&sim.model);
+        let (mut mn, mut mt) = (f64::INFINITY, f64::INFINITY);
+        quadsim_engine::kinematics::forward_kinematics_pos(&sim.model, &mut data, &sim.state.q);
+        for p in sim.contact.points.iter().take(sim.run.n_feet) {
+            // the force acts at the sphere's lowest point, not its centre
+            let lowest =
+                data.body_point_world(p.body, p.point_in_body) - glam::DVec3::Z * p.radius_m;
+            let bottom = data.pose[p.body].inverse().transform_point(lowest);
+            if let Some((a, b)) = contact_apparent_masses(
+                &sim.model,
+                &mut data,
+                &sim.state.q,
+                p.body,
+                bottom,
+                glam::DVec3::Z,
+            ) {
+                mn = mn.min(a);
+                mt = mt.min(b);
+            }
+        }
+        if mn.is_finite() {
+            masses.push((
+                format!("a foot's apparent mass ({mn:.3} kg normal, {mt:.3} kg tangential)"),
+                mn,
+                mt,
+            ));
+        }
         for (label, mat) in &materials {
-            for w in check_stability(mat, scn.file.world.dt_s, m_stance) {
-                out.push(format!("robot '{name}' on {label}: {w}"));
+            for (what, m_n, m_t) in &masses {
+                for w in check_stability_split(mat, dt, *m_n, *m_t) {
+                    out.push(format!("robot '{name}' on {label}, {what}: {w}"));
+                }
             }
         }
     }
