@@ -7,6 +7,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod heightmap;
 pub mod model_source;
 pub mod scenario;
 pub mod terrain_spec;

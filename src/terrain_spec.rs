@@ -7,10 +7,11 @@ use glam::{DVec2, DVec3};
 use quadsim_engine::contact::GroundMaterial;
 use quadsim_engine::contact::law::NormalLaw;
 use quadsim_engine::terrain::{
-    BoxObstacles, BoxSpec, Flat, Incline, NoiseKind, Rough, Sinusoid, StairDirection, Stairs,
-    SteppingStones, TerrainPatch, TerrainShape, Trench,
+    BoxObstacles, BoxSpec, Flat, HeightField, Incline, NoiseKind, Rough, Sinusoid, StairDirection,
+    Stairs, SteppingStones, TerrainPatch, TerrainShape, Trench,
 };
 
+use crate::heightmap::read_heightmap;
 use crate::scenario::format::{GroundSpec, TerrainSpec};
 use crate::scenario::{Locator, ScenarioError};
 
@@ -73,7 +74,7 @@ pub fn terrain_patch(
     p: &str,
     t: &TerrainSpec,
     seed: u64,
-    _base_dir: &Path,
+    base_dir: &Path,
 ) -> Result<TerrainPatch, ScenarioError> {
     let e = t.extent_m.unwrap_or(DEFAULT_EXTENT_M);
     let size = DVec2::new(e[0], e[1]);
@@ -217,12 +218,10 @@ pub fn terrain_patch(
                 .map_err(err)?;
             (TerrainShape::SteppingStones(stones), 0.0)
         }
-        "heightmap" => {
-            return Err(loc.at(
-                &format!("{p}.kind"),
-                "heightmap files are not supported by this build yet",
-            ));
-        }
+        "heightmap" => (
+            TerrainShape::HeightField(heightmap_field(loc, p, t, base_dir)?),
+            0.0,
+        ),
         other => {
             return Err(loc.at(
                 &format!("{p}.kind"),
@@ -235,4 +234,53 @@ pub fn terrain_patch(
         None => GroundMaterial::preset("concrete").expect("preset"),
     };
     TerrainPatch::new(shape, DVec3::from_array(t.origin_m), yaw, material).map_err(err)
+}
+
+/// The height field of a `kind = "heightmap"` entry: the file (relative to
+/// the scenario's directory, see [`crate::heightmap`] for formats and
+/// orientation) sampled every `horizontal_scale_m` along x and y and centred
+/// on the terrain's origin, heights `vertical_scale_m` times the file's values
+/// (PNG: times `v / (2^bits − 1)`). The file's size sets the extent, so an
+/// `extent_m` that disagrees with it is an error.
+fn heightmap_field(
+    loc: &Locator<'_>,
+    p: &str,
+    t: &TerrainSpec,
+    base_dir: &Path,
+) -> Result<HeightField, ScenarioError> {
+    let file = t
+        .params
+        .get("file")
+        .and_then(|v| v.as_str())
+        .ok_or_else(|| loc.at(p, "terrain kind 'heightmap' needs the key 'file'"))?;
+    let spacing = num(t, "horizontal_scale_m")
+        .ok_or_else(|| loc.at(p, "terrain kind 'heightmap' needs 'horizontal_scale_m'"))?;
+    let vertical = num(t, "vertical_scale_m")
+        .ok_or_else(|| loc.at(p, "terrain kind 'heightmap' needs 'vertical_scale_m'"))?;
+    let path = base_dir.join(file);
+    let grid = read_heightmap(&path).map_err(|e| loc.at(&format!("{p}.file"), e.to_string()))?;
+    let size = [
+        (grid.nx - 1) as f64 * spacing,
+        (grid.ny - 1) as f64 * spacing,
+    ];
+    if let Some(e) = t.extent_m
+        && (0..2).any(|k| (e[k] - size[k]).abs() > 1e-6 * size[k].max(1.0))
+    {
+        return Err(loc.at(
+            &format!("{p}.extent_m"),
+            format!(
+                "a heightmap's extent is set by its file: {} × {} samples every {spacing} m \
+                 span [{}, {}] m, not [{}, {}] m; remove extent_m or make it [{}, {}]",
+                grid.nx, grid.ny, size[0], size[1], e[0], e[1], size[0], size[1]
+            ),
+        ));
+    }
+    HeightField::new(
+        grid.nx,
+        grid.ny,
+        DVec2::splat(spacing),
+        vertical,
+        &grid.values,
+    )
+    .map_err(|e| loc.at(p, e.to_string()))
 }

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 pub mod dynamics;
 pub mod models;
 pub mod run;
+pub mod terrain;
 
 /// quadsim: simulate quadruped robots.
 #[derive(Debug, Parser)]
@@ -28,6 +29,8 @@ pub enum Command {
     Dynamics(dynamics::DynamicsArgs),
     /// List the built-in robots, or one robot's parameters.
     Models(models::ModelsArgs),
+    /// Terrain tools: `quadsim terrain export` samples a terrain into a heightmap file.
+    Terrain(terrain::TerrainArgs),
 }
 
 /// Runs the parsed command line.
@@ -38,5 +41,6 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Schema => run::schema(),
         Command::Dynamics(a) => dynamics::run(a),
         Command::Models(a) => models::run(a),
+        Command::Terrain(a) => terrain::run(a),
     }
 }
