@@ -23,6 +23,43 @@
 //! phase: four legs on `[0, 0.2)` (0.1 s), LF+RH on `[0.2, 0.5)` (0.15 s, RF and
 //! LH swing), four legs on `[0.5, 0.7)`, RF+LH on `[0.7, 1)` (LF and RH swing).
 //! See [`Gait::study_a_trot`] and [`Gait::trot_from_supports`].
+//!
+//! # Examples
+//! One control tick: advance the clock with the feet's contacts, place each
+//! swinging foot, and read its reference (position, velocity, acceleration).
+//! ```
+//! use glam::{DVec2, DVec3};
+//! use quadsim_engine::gait::swing::DEFAULT_LIFT_HEIGHT_M;
+//! use quadsim_engine::gait::{
+//!     Gait, GaitScheduler, PlacementInput, PlacementParams, ReachDown, SchedulerParams, raibert_offset,
+//! };
+//!
+//! let gait = Gait::study_a_trot();
+//! let mut sched = GaitScheduler::new(gait, SchedulerParams::default()).unwrap();
+//! let feet_m = [DVec3::ZERO; 4]; // from kinematics, world frame
+//! for _ in 0..200 {
+//!     sched.update_with_feet(0.002, &[true; 4], &feet_m);
+//! }
+//! for leg in 0..4 {
+//!     if !sched.leg(leg).is_stance() {
+//!         let p = raibert_offset(
+//!             &PlacementParams::default(),
+//!             &PlacementInput {
+//!                 vel_m_s: DVec2::new(1.0, 0.0),
+//!                 vel_des_m_s: DVec2::new(1.5, 0.0),
+//!                 yaw_rate_rad_s: 0.0,
+//!                 hip_m: DVec2::new(0.25, 0.15),
+//!                 stance_duration_s: gait.stance_duration_s(),
+//!             },
+//!         );
+//!         sched.set_touchdown_target(leg, DVec3::new(p.offset_m.x, p.offset_m.y, 0.0));
+//!         let r = sched.leg(leg).swing_reference(DEFAULT_LIFT_HEIGHT_M, &ReachDown::default());
+//!         assert!(r.pos_m.z >= 0.0);
+//!     }
+//! }
+//! // The force distribution bounds each foot's force by its load factor.
+//! assert!(sched.loads().iter().all(|l| (0.0..=1.0).contains(l)));
+//! ```
 
 pub mod placement;
 pub mod scheduler;

@@ -17,7 +17,7 @@
 //!    [`LegState::late_s`]; the controller keeps reaching down
 //!    ([`super::swing::ReachDown`]) until the foot reports contact, and the leg
 //!    enters stance at that tick ([`TouchdownKind::Late`]; [`TouchdownKind::OnTime`]
-//!    when the contact comes at the tick the swing ends).
+//!    when the contact is reported in the tick the swing ends or the next).
 //! 4. A leg still reaching down when its next lift-off comes restarts a swing
 //!    from where it is (rule 1), so a leg over a hole does not hang forever.
 //! 5. Stance never ends early on a lost contact: the clock alone lifts a foot.
@@ -107,7 +107,8 @@ pub enum LegPhase {
 pub enum TouchdownKind {
     /// Contact before the scheduled end (e.g. a step up).
     Early,
-    /// Contact at the tick the scheduled swing ended.
+    /// Contact reported in the tick the scheduled swing ends or in the next
+    /// one (a contact flag describes the foot as the previous step left it).
     OnTime,
     /// Contact after the scheduled end, while reaching down (e.g. a step down).
     Late,
@@ -302,9 +303,11 @@ impl GaitScheduler {
                 let ended =
                     leg.time_since_liftoff_s >= leg.swing_duration_s - END_SLACK_PERIODS * period;
                 if leg.contact && progress >= self.params.early_touchdown_min_progress {
+                    // `leg.late_s` is still the previous tick's: below one
+                    // tick, the contact is the first report after the end.
                     let kind = if !ended {
                         TouchdownKind::Early
-                    } else if leg.late_s > 0.0 {
+                    } else if leg.late_s >= dt_s - END_SLACK_PERIODS * period {
                         TouchdownKind::Late
                     } else {
                         TouchdownKind::OnTime
