@@ -294,14 +294,15 @@ impl GaitScheduler {
                 leg.swing_duration_s = self.gait.swing_duration_s();
                 leg.late_s = 0.0;
                 events[i] = LegEvent::LiftOff;
-            } else if leg.phase == LegPhase::Swing {
-                let progress = if leg.swing_duration_s > 0.0 {
-                    leg.time_since_liftoff_s / leg.swing_duration_s
-                } else {
-                    1.0
-                };
-                let ended =
-                    leg.time_since_liftoff_s >= leg.swing_duration_s - END_SLACK_PERIODS * period;
+            }
+            let progress = if leg.swing_duration_s > 0.0 {
+                leg.time_since_liftoff_s / leg.swing_duration_s
+            } else {
+                1.0
+            };
+            let ended =
+                leg.time_since_liftoff_s >= leg.swing_duration_s - END_SLACK_PERIODS * period;
+            if !lift && leg.phase == LegPhase::Swing {
                 if leg.contact && progress >= self.params.early_touchdown_min_progress {
                     // `leg.late_s` is still the previous tick's: below one
                     // tick, the contact is the first report after the end.
@@ -319,13 +320,7 @@ impl GaitScheduler {
             }
             match leg.phase {
                 LegPhase::Swing => {
-                    let ended = leg.time_since_liftoff_s
-                        >= leg.swing_duration_s - END_SLACK_PERIODS * period;
-                    leg.swing_progress = if ended || leg.swing_duration_s <= 0.0 {
-                        1.0
-                    } else {
-                        leg.time_since_liftoff_s / leg.swing_duration_s
-                    };
+                    leg.swing_progress = if ended { 1.0 } else { progress };
                     leg.late_s = if ended {
                         // Positive from the first tick the swing has ended.
                         (leg.time_since_liftoff_s - leg.swing_duration_s).max(f64::MIN_POSITIVE)
