@@ -29,6 +29,7 @@ pub mod gait;
 pub mod integrate;
 pub mod jacobian;
 pub mod kinematics;
+pub mod legs;
 pub mod linalg;
 pub mod metrics;
 pub mod model;
