@@ -384,7 +384,7 @@ fn conflicting_extent_is_refused() {
 #[test]
 fn robot_starts_on_the_heightmap() {
     let d = dir("robot");
-    let rows = vec!["0.1,0.1,0.1,0.1,0.1"; 5].join("\n");
+    let rows = ["0.1,0.1,0.1,0.1,0.1"; 5].join("\n");
     std::fs::write(d.join("m.csv"), rows).unwrap();
     let path = scenario(&d, "m.csv", "");
     let mut src = std::fs::read_to_string(&path).unwrap();
