@@ -302,21 +302,24 @@ impl GaitScheduler {
             };
             let ended =
                 leg.time_since_liftoff_s >= leg.swing_duration_s - END_SLACK_PERIODS * period;
-            if !lift && leg.phase == LegPhase::Swing {
-                if leg.contact && progress >= self.params.early_touchdown_min_progress {
-                    // `leg.late_s` is still the previous tick's: below one
-                    // tick, the contact is the first report after the end.
-                    let kind = if !ended {
-                        TouchdownKind::Early
-                    } else if leg.late_s >= dt_s - END_SLACK_PERIODS * period {
-                        TouchdownKind::Late
-                    } else {
-                        TouchdownKind::OnTime
-                    };
-                    leg.phase = LegPhase::Stance;
-                    leg.time_since_touchdown_s = 0.0;
-                    events[i] = LegEvent::Touchdown(kind);
-                }
+            // Touchdown: rules 2 and 3 (not in the tick of a lift-off).
+            if !lift
+                && leg.phase == LegPhase::Swing
+                && leg.contact
+                && progress >= self.params.early_touchdown_min_progress
+            {
+                // `leg.late_s` is still the previous tick's: below one
+                // tick, the contact is the first report after the end.
+                let kind = if !ended {
+                    TouchdownKind::Early
+                } else if leg.late_s >= dt_s - END_SLACK_PERIODS * period {
+                    TouchdownKind::Late
+                } else {
+                    TouchdownKind::OnTime
+                };
+                leg.phase = LegPhase::Stance;
+                leg.time_since_touchdown_s = 0.0;
+                events[i] = LegEvent::Touchdown(kind);
             }
             match leg.phase {
                 LegPhase::Swing => {
