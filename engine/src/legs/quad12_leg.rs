@@ -145,10 +145,12 @@ impl Quad12Leg {
     }
 
     /// Like [`Self::ik`], but an unreachable target is projected onto the
-    /// reachable workspace: onto the offset cylinder about the yaw axis, then
-    /// radially about the hip pitch joint in the leg plane (the nearest
-    /// reachable point of this solid of revolution); a far target gives a
-    /// straight knee along the direction to it.
+    /// reachable workspace: onto the offset cylinder about the yaw axis, then,
+    /// in the leg plane through the target, radially about the hip pitch
+    /// joint onto the annulus the foot reaches. A target beyond the straight
+    /// leg thus gets the straight leg pointing at it from the hip pitch joint
+    /// (the nearest point of that plane; with the lateral offset l1 the
+    /// nearest point in space turns the leg a little further toward it).
     ///
     /// # Errors
     /// [`IkError::NonFinite`] only.

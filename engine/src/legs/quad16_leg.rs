@@ -158,12 +158,13 @@ impl Quad16Leg {
 
     /// Like [`Self::ik`], but an unreachable target is projected onto the
     /// reachable workspace (for the chosen branch and ankle mode): onto the
-    /// offset circle about the roll axis, then radially in the leg plane onto
-    /// the annulus the wrist reaches about the hip pitch joint. A target
-    /// beyond the straight leg gets the straight leg pointing at it, the
-    /// nearest reachable point (the workspace is a solid of revolution about
-    /// the roll axis); a target inside the folded leg's reach gets the folded
-    /// knee.
+    /// offset circle about the roll axis, then, in the leg plane through the
+    /// target, radially about the hip pitch joint onto the annulus the wrist
+    /// reaches. A target beyond the straight leg gets the straight leg
+    /// pointing the wrist at it; a target inside the folded leg's reach gets
+    /// the folded knee. With no lateral offset (the built-in) the workspace is
+    /// a solid of revolution about the roll axis and this is the nearest
+    /// reachable point.
     ///
     /// # Errors
     /// [`IkError::NonFinite`] only.
