@@ -165,7 +165,7 @@ fn quad16_round_trip(overrides: &[(&str, f64)], point: FootPoint, seed: u64) {
                     }
                     tested += 1;
                     let p = leg.fk(a);
-                    let q = random_q(&model, &mut rng, &leg.q_indices(), &a);
+                    let q = random_q(&model, &mut rng, leg.q_indices(), &a);
                     let engine = engine_foot_in_base(
                         &model,
                         &mut data,
@@ -223,7 +223,7 @@ fn quad12_round_trip(overrides: &[(&str, f64)], point: FootPoint, seed: u64) {
                 }
                 tested += 1;
                 let p = leg.fk(a);
-                let q = random_q(&model, &mut rng, &leg.q_indices(), &a);
+                let q = random_q(&model, &mut rng, leg.q_indices(), &a);
                 let engine = engine_foot_in_base(
                     &model,
                     &mut data,
@@ -415,8 +415,8 @@ fn unreachable_targets_error_and_clamp_toward_them() {
             let leg_name = &name[..2];
             let q_idx = leg.q_indices();
             let pitch_joint =
-                link_origin(&model, &q_idx, &c.angles_rad, &format!("{leg_name}_thigh"));
-            let ankle = link_origin(&model, &q_idx, &c.angles_rad, name);
+                link_origin(&model, q_idx, &c.angles_rad, &format!("{leg_name}_thigh"));
+            let ankle = link_origin(&model, q_idx, &c.angles_rad, name);
             assert_same_direction(pitch_joint, ankle, target - (c.foot_m - ankle));
             assert!(((ankle - pitch_joint).length() - hi).abs() < 1e-12);
             assert_local_nearest(fk, &c.angles_rad[..3], target, &[0, 1, 2]);
@@ -463,7 +463,7 @@ fn unreachable_targets_error_and_clamp_toward_them() {
             let name = &model.frames[leg.foot_frame()].name;
             let pitch_joint = link_origin(
                 &model,
-                &leg.q_indices(),
+                leg.q_indices(),
                 &c.angles_rad,
                 &format!("{}_thigh", &name[..2]),
             );
@@ -522,7 +522,7 @@ fn joint_velocities_reproduce_the_foot_velocity_through_the_engine_jacobian() {
                     continue; // near a singular pose, where round-off dominates
                 }
                 tested += 1;
-                let q = random_q(&model, &mut rng, &leg.q_indices(), &a);
+                let q = random_q(&model, &mut rng, leg.q_indices(), &a);
                 forward_kinematics_pos(&model, &mut data, &q);
                 let frame = leg.foot_frame();
                 let point = FootPoint::Contact.in_foot(&desc, &model.frames[frame].name);

@@ -173,18 +173,18 @@ impl LegKinematics {
     }
 
     /// Indices of the leg's joints in q.
-    pub fn q_indices(&self) -> Vec<usize> {
+    pub fn q_indices(&self) -> &[usize] {
         match self {
-            Self::Quad16(l) => l.q_indices().to_vec(),
-            Self::Quad12(l) => l.q_indices().to_vec(),
+            Self::Quad16(l) => l.q_indices(),
+            Self::Quad12(l) => l.q_indices(),
         }
     }
 
     /// Indices of the leg's joints in v.
-    pub fn v_indices(&self) -> Vec<usize> {
+    pub fn v_indices(&self) -> &[usize] {
         match self {
-            Self::Quad16(l) => l.v_indices().to_vec(),
-            Self::Quad12(l) => l.v_indices().to_vec(),
+            Self::Quad16(l) => l.v_indices(),
+            Self::Quad12(l) => l.v_indices(),
         }
     }
 

@@ -95,13 +95,13 @@ impl Quad12Leg {
     }
 
     /// Indices of the leg's joints in q.
-    pub fn q_indices(&self) -> [usize; 3] {
-        self.q_index
+    pub fn q_indices(&self) -> &[usize; 3] {
+        &self.q_index
     }
 
     /// Indices of the leg's joints in v.
-    pub fn v_indices(&self) -> [usize; 3] {
-        self.v_index
+    pub fn v_indices(&self) -> &[usize; 3] {
+        &self.v_index
     }
 
     /// The leg's angles gathered from a full configuration `q`.
