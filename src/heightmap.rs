@@ -275,7 +275,7 @@ fn read_csv(path: &Path, r: BufReader<File>) -> Result<HeightGrid, HeightmapErro
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
         .from_reader(r);
-    // rows in file order (top = largest y); flipped at the end
+    // rows in file order (top = largest y), flipped at the end
     let mut rows: Vec<f64> = Vec::new();
     let mut nx = 0;
     let mut ny = 0;
@@ -328,12 +328,16 @@ fn read_csv(path: &Path, r: BufReader<File>) -> Result<HeightGrid, HeightmapErro
             path: path.to_path_buf(),
         });
     }
-    let mut values = vec![0.0; nx * ny];
-    for r in 0..ny {
-        let j = ny - 1 - r;
-        values[j * nx..(j + 1) * nx].copy_from_slice(&rows[r * nx..(r + 1) * nx]);
+    // file order (top row first) to increasing y, in place
+    for r in 0..ny / 2 {
+        let (top, bottom) = rows.split_at_mut((ny - 1 - r) * nx);
+        top[r * nx..(r + 1) * nx].swap_with_slice(&mut bottom[..nx]);
     }
-    Ok(HeightGrid { nx, ny, values })
+    Ok(HeightGrid {
+        nx,
+        ny,
+        values: rows,
+    })
 }
 
 fn write_err(path: &Path, e: impl std::fmt::Display) -> HeightmapError {
