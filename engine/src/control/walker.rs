@@ -1,0 +1,493 @@
+//! The walking controller of Study A: gait scheduler + Virtual Model Control +
+//! stance-force QP + swing-leg tracking, composed per control tick.
+//!
+//! One [`Walker::tick`] (at the controller rate, 500 Hz by default):
+//!
+//! 1. **Gait**: the scheduler advances with the feet's contact flags
+//!    ([`crate::gait::scheduler`]: clock-driven lift-off, contact-driven
+//!    touchdown, load ramps).
+//! 2. **Placement**: every swinging foot's touchdown target is the hip's
+//!    ground projection plus Raibert's offset `v·T_st/2 + k (v − v_des)`
+//!    (clipped), on the terrain beneath it.
+//! 3. **VMC**: the virtual wrench `W` about the CoM from six spring–dampers
+//!    plus gravity compensation ([`super::vmc`]).
+//! 4. **Force distribution**: `W` over the loaded stance feet
+//!    ([`super::force_qp`], friction pyramids about the terrain normal).
+//! 5. **Stance torques** `τ = −Jᵀ f` (f = the ground's force on the foot);
+//!    quad16's ankle, redundant for a point foot, holds the foot level by PD.
+//! 6. **Swing**: the foot follows a min-jerk swing in the world; its
+//!    reference, expressed in the base frame, goes through closed-form leg IK
+//!    to joint targets tracked by joint PD.
+//!
+//! In flight (no stance foot) the stance torques are zero and only the swing
+//! legs are driven. Sign conventions: see [`super::force_qp`] (torques) and
+//! [`super::vmc`] (wrench).
+
+use crate::com::{center_of_mass, com_velocity};
+use crate::data::Data;
+use crate::description::RobotDescription;
+use crate::gait::placement::{PlacementInput, PlacementParams, foot_target_world, raibert_offset};
+use crate::gait::scheduler::{GaitScheduler, LegPhase, SchedulerParams};
+use crate::gait::swing::ReachDown;
+use crate::gait::{Gait, GaitError};
+use crate::legs::ik::IkOptions;
+use crate::legs::{FootPoint, LegError, LegKinematics};
+use crate::model::Model;
+use crate::spatial::{Force, rpy_from_rot};
+use crate::terrain::{Terrain, TerrainUnion};
+use glam::{DMat3, DVec2, DVec3};
+
+use super::force_qp::{FootForces, ForceQp, ForceQpParams, MAX_FEET, StanceFoot, stance_torques};
+use super::joint_pd::bandwidth_gains;
+use super::vmc::{Vmc, VmcCommand, VmcInput, VmcParams};
+
+/// Everything that configures a [`Walker`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct WalkerParams {
+    /// The gait (Study A's trot by default).
+    pub gait: Gait,
+    /// Scheduler rules (touchdown, load ramps).
+    pub scheduler: SchedulerParams,
+    /// VMC gains and targets.
+    pub vmc: VmcParams,
+    /// Initial velocity command.
+    pub command: VmcCommand,
+    /// Force-QP weights and bounds.
+    pub qp: ForceQpParams,
+    /// Foot placement.
+    pub placement: PlacementParams,
+    /// Swing apex above the lift-off/touchdown line (m). Study A: 0.17 m.
+    pub lift_height_m: f64,
+    /// Reaching down after a late swing.
+    pub reach: ReachDown,
+    /// Swing-leg joint stiffness per joint (N·m/rad; joints only).
+    pub swing_kp_nm_per_rad: Vec<f64>,
+    /// Swing-leg joint damping per joint (N·m·s/rad).
+    pub swing_kd_nms_per_rad: Vec<f64>,
+    /// Stance ankle hold (quad16): stiffness (N·m/rad) and damping (N·m·s/rad).
+    pub ankle_hold: (f64, f64),
+    /// Inverse-kinematics options (knee branch, ankle mode).
+    pub ik: IkOptions,
+}
+
+impl WalkerParams {
+    /// Defaults that work for `model` (compiled from `desc`): Study A's trot
+    /// and VMC gains for quad16 (0.5 m height target); other robots get the
+    /// same gains scaled by their mass ratio to quad16 (28 kg) and a height
+    /// target at 0.85 of their nominal stance height (quad16: 0.5 / 0.585).
+    /// Swing gains: joint bandwidth gains ([`bandwidth_gains`]) at the
+    /// nominal stance, 4 Hz, critically damped.
+    pub fn default_for(desc: &RobotDescription, model: &Model) -> WalkerParams {
+        let nj = model.nv - model.base_nv();
+        let stance = crate::robots::nominal_stance(&desc.name)
+            .filter(|s| s.len() == nj)
+            .unwrap_or_else(|| vec![0.0; nj]);
+        let stance_h = crate::robots::stance_base_height_m(desc, &stance).unwrap_or(0.585);
+        let mut q = vec![0.0, 0.0, stance_h, 0.0, 0.0, 0.0, 1.0];
+        q.extend_from_slice(&stance);
+        q.resize(model.nq, 0.0);
+        let mut data = Data::new(model);
+        let (kp, kd) = bandwidth_gains(model, &mut data, &q, 4.0, 1.0);
+        let g = model.gravity.length();
+        let mut vmc = VmcParams::for_model(model);
+        let is_quad16 = desc.name == "quad16";
+        if !is_quad16 {
+            let r = model.total_mass / QUAD16_MASS_KG;
+            let gn = &mut vmc.gains;
+            gn.stiffness_npm *= r;
+            gn.damping_nspm *= r;
+            gn.stiffness_nm_per_rad *= r;
+            gn.damping_nms_per_rad *= r;
+            vmc.base_height_m = 0.85 * stance_h;
+        }
+        let h = vmc.base_height_m;
+        let scale = h / 0.5;
+        WalkerParams {
+            gait: Gait::study_a_trot(),
+            scheduler: SchedulerParams::default(),
+            vmc,
+            command: VmcCommand {
+                forward_mps: 0.0,
+                lateral_mps: 0.0,
+                yaw_rate_radps: 0.0,
+            },
+            qp: ForceQpParams::default(),
+            placement: PlacementParams {
+                gain_s: PlacementParams::capture_point_gain_s(h, g),
+                max_step_x_m: 0.25 * scale,
+                max_step_y_m: 0.12 * scale,
+            },
+            lift_height_m: 0.05 * scale,
+            reach: ReachDown::default(),
+            swing_kp_nm_per_rad: kp,
+            swing_kd_nms_per_rad: kd,
+            ankle_hold: (20.0, 0.3),
+            ik: IkOptions::default(),
+        }
+    }
+}
+
+/// quad16's total mass (kg), the reference of [`WalkerParams::default_for`]'s
+/// gain scaling.
+const QUAD16_MASS_KG: f64 = 28.0;
+
+/// Why a walker cannot be built.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum WalkerError {
+    /// The legs could not be identified from the model.
+    #[error("walker: {0}")]
+    Legs(#[from] LegError),
+    /// The gait does not fit the robot.
+    #[error("walker: {0}")]
+    Gait(#[from] GaitError),
+    /// A gain list has the wrong length.
+    #[error("walker: {field} has {got} entries, the robot has {expected} joints")]
+    GainLength {
+        /// The field.
+        field: &'static str,
+        /// Entries given.
+        got: usize,
+        /// Joints.
+        expected: usize,
+    },
+    /// More feet than the force QP takes.
+    #[error("walker: {0} feet; at most 4 are supported")]
+    TooManyFeet(usize),
+}
+
+/// What the walker needs to read each tick besides the model and state.
+#[derive(Clone, Copy, Debug)]
+pub struct WalkerInput<'a> {
+    /// Time since the previous tick (s).
+    pub dt_s: f64,
+    /// The ground.
+    pub terrain: &'a TerrainUnion,
+    /// Whether each foot touches the ground (leg order = the model's feet).
+    pub contacts: &'a [bool],
+    /// Ground normal at each foot (unit, world; +z when unknown).
+    pub normals: &'a [DVec3],
+}
+
+#[derive(Clone, Copy, Debug)]
+struct LegInfo {
+    frame: usize,
+    body: usize,
+    point: DVec3,
+    qi: [usize; 4],
+    vi: [usize; 4],
+    dof: usize,
+}
+
+/// The walking controller of one robot (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Walker {
+    /// Parameters.
+    pub params: WalkerParams,
+    legs: Vec<LegKinematics>,
+    /// Per leg: foot frame, the placed point in it, joint q and v indices, DOF.
+    leg_info: Vec<LegInfo>,
+    scheduler: GaitScheduler,
+    vmc: Vmc,
+    qp: ForceQp,
+    /// Joint targets of the last tick (rad, joints only): swing legs their IK
+    /// reference, stance legs the angles that would hold the body at its
+    /// target height, level, over the current footholds.
+    q_des: Vec<f64>,
+    wrench: Force,
+    forces: FootForces,
+    feet_world: [DVec3; MAX_FEET],
+    /// Joint rows of the nonlinear effects `C(q, v) v + g(q)` (N·m).
+    bias: Vec<f64>,
+    leg_q: Vec<f64>,
+    leg_qd: Vec<f64>,
+}
+
+impl Walker {
+    /// A walker for `model` (compiled from `desc`), starting with every leg in
+    /// stance at the gait's phase 0.
+    pub fn new(
+        desc: &RobotDescription,
+        model: &Model,
+        params: WalkerParams,
+    ) -> Result<Walker, WalkerError> {
+        let legs = LegKinematics::for_robot(desc, model, FootPoint::Contact)?;
+        if legs.len() > MAX_FEET {
+            return Err(WalkerError::TooManyFeet(legs.len()));
+        }
+        let nj = model.nv - model.base_nv();
+        for (field, v) in [
+            ("swing_kp_nm_per_rad", &params.swing_kp_nm_per_rad),
+            ("swing_kd_nms_per_rad", &params.swing_kd_nms_per_rad),
+        ] {
+            if v.len() != nj {
+                return Err(WalkerError::GainLength {
+                    field,
+                    got: v.len(),
+                    expected: nj,
+                });
+            }
+        }
+        let scheduler = GaitScheduler::new(params.gait, params.scheduler)?;
+        let leg_info = legs
+            .iter()
+            .map(|leg| {
+                let frame = leg.foot_frame();
+                let (qv, vv) = (leg.q_indices(), leg.v_indices());
+                let mut qi = [0; 4];
+                let mut vi = [0; 4];
+                qi[..qv.len()].copy_from_slice(qv);
+                vi[..vv.len()].copy_from_slice(vv);
+                LegInfo {
+                    frame,
+                    body: model.frames[frame].body,
+                    point: FootPoint::Contact.in_foot(desc, &model.frames[frame].name),
+                    qi,
+                    vi,
+                    dof: qv.len(),
+                }
+            })
+            .collect();
+        Ok(Walker {
+            vmc: Vmc::new(params.vmc, params.command),
+            qp: ForceQp::new(params.qp),
+            scheduler,
+            legs,
+            leg_info,
+            q_des: vec![0.0; nj],
+            wrench: Force::ZERO,
+            forces: [DVec3::ZERO; MAX_FEET],
+            feet_world: [DVec3::ZERO; MAX_FEET],
+            bias: vec![0.0; nj],
+            leg_q: vec![0.0; 4],
+            leg_qd: vec![0.0; 4],
+            params,
+        })
+    }
+
+    /// Changes the velocity command (a scenario `command` event).
+    pub fn set_command(&mut self, command: VmcCommand) {
+        self.vmc.command = command;
+    }
+
+    /// The current velocity command.
+    pub fn command(&self) -> VmcCommand {
+        self.vmc.command
+    }
+
+    /// Joint targets of the last tick (rad, joints only).
+    pub fn joint_targets(&self) -> &[f64] {
+        &self.q_des
+    }
+
+    /// The virtual wrench of the last tick (N, N·m about the CoM, world).
+    pub fn wrench(&self) -> Force {
+        self.wrench
+    }
+
+    /// Ground reaction forces the last tick asked of each foot (N, world).
+    pub fn foot_forces(&self) -> &FootForces {
+        &self.forces
+    }
+
+    /// The gait scheduler.
+    pub fn scheduler(&self) -> &GaitScheduler {
+        &self.scheduler
+    }
+
+    /// One control tick at `(q, v)`; writes the joint torques (N·m, joints
+    /// only) into `tau_joints`. Leaves `data` with kinematics (and RNEA
+    /// workspaces) at `(q, v)`; overwrites `data.jacobian`.
+    ///
+    /// Every joint also gets its row of the nonlinear effects `C(q, v) v + g(q)`:
+    /// the legs carry their own weight (quad16's legs are 18 of its 28 kg),
+    /// which `τ = −Jᵀ f` alone would leave to the joint PD; for a stance leg
+    /// `τ = h − Jᵀ f` is the exact static hold (`M q̈ + h = τ + Jᵀ f`, q̈ = 0).
+    pub fn tick(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        input: &WalkerInput<'_>,
+        tau_joints: &mut [f64],
+    ) {
+        let nl = self.legs.len();
+        let nv0 = model.base_nv();
+        crate::nle::nonlinear_effects(model, data, q, v);
+        self.bias.copy_from_slice(&data.nle[nv0..]);
+        let base = data.pose[0];
+        let rot = base.rot;
+        let p_base = base.trans;
+        let v_base = data.vel[0].lin;
+        let w_base = data.vel[0].ang;
+        let com = center_of_mass(model, data);
+        let com_vel = com_velocity(model, data);
+        let yaw = rpy_from_rot(rot).z;
+        let heading = DMat3::from_rotation_z(yaw);
+
+        // 1. gait, with the feet's world positions for lift-off/touchdown points
+        for (i, li) in self.leg_info.iter().enumerate() {
+            let fp = crate::kinematics::frame_pose(model, data, li.frame);
+            self.feet_world[i] = fp.transform_point(li.point);
+        }
+        self.scheduler
+            .update_with_feet(input.dt_s, input.contacts, &self.feet_world[..nl]);
+
+        // 2. touchdown targets of swinging legs (Raibert, heading frame)
+        let v_h = (heading.transpose() * com_vel).truncate();
+        let cmd = self.vmc.command;
+        let stance_s = self.scheduler.gait().stance_duration_s();
+        for i in 0..nl {
+            if self.scheduler.leg(i).phase != LegPhase::Swing {
+                continue;
+            }
+            let hip_body = self.legs[i].mount().trans;
+            let hip_world = base.transform_point(hip_body);
+            let hip_h = (heading.transpose() * (hip_world - com)).truncate();
+            let placement = raibert_offset(
+                &self.params.placement,
+                &PlacementInput {
+                    vel_m_s: v_h,
+                    vel_des_m_s: DVec2::new(cmd.forward_mps, cmd.lateral_mps),
+                    yaw_rate_rad_s: w_base.z,
+                    hip_m: hip_h,
+                    stance_duration_s: stance_s,
+                },
+            );
+            let o = DVec2::new(
+                placement.offset_m.x * yaw.cos() - placement.offset_m.y * yaw.sin(),
+                placement.offset_m.x * yaw.sin() + placement.offset_m.y * yaw.cos(),
+            );
+            let gz = input
+                .terrain
+                .height(hip_world.x + o.x, hip_world.y + o.y)
+                .unwrap_or(self.feet_world[i].z);
+            let target = foot_target_world(hip_world, yaw, gz, placement.offset_m);
+            self.scheduler.set_touchdown_target(i, target);
+        }
+
+        // 3. virtual wrench
+        let ground_z = input.terrain.height(p_base.x, p_base.y).unwrap_or(0.0);
+        self.wrench = self.vmc.update(&VmcInput {
+            base_position_m: p_base,
+            base_rotation: rot,
+            base_linear_velocity_mps: v_base,
+            base_angular_velocity_radps: w_base,
+            com_m: com,
+            com_velocity_mps: com_vel,
+            height_above_ground_m: p_base.z - ground_z,
+            dt_s: input.dt_s,
+        });
+
+        // 4. force distribution over loaded stance feet
+        let mut feet = [StanceFoot {
+            position_m: DVec3::ZERO,
+            normal: DVec3::Z,
+            friction: 0.0,
+            load: 0.0,
+        }; MAX_FEET];
+        for i in 0..nl {
+            let leg = self.scheduler.leg(i);
+            let load = if leg.phase == LegPhase::Stance {
+                leg.load
+            } else {
+                0.0
+            };
+            let friction = input
+                .terrain
+                .closest_with_material(self.feet_world[i])
+                .map_or(0.5, |(_, m)| m.friction);
+            let n = input
+                .normals
+                .get(i)
+                .copied()
+                .filter(|n| n.length_squared() > 0.5)
+                .unwrap_or(DVec3::Z);
+            feet[i] = StanceFoot {
+                position_m: self.feet_world[i] - com,
+                normal: n,
+                friction,
+                load,
+            };
+        }
+        self.forces = match self.qp.solve(&feet[..nl], &self.wrench) {
+            Ok(f) => f,
+            Err(_) => [DVec3::ZERO; MAX_FEET],
+        };
+
+        // 5. stance torques τ = −Jᵀ f (zero for unloaded or swinging feet)
+        let mut pts = [(0usize, DVec3::ZERO); MAX_FEET];
+        for i in 0..nl {
+            pts[i] = (self.leg_info[i].body, self.feet_world[i]);
+        }
+        stance_torques(model, data, &pts[..nl], &self.forces[..nl], tau_joints);
+
+        // 6. per leg: joint targets; swing legs tracked by PD, the stance ankle held
+        let target_height = self.vmc.params.base_height_m;
+        let planned_base = crate::spatial::Transform::new(
+            heading,
+            DVec3::new(p_base.x, p_base.y, ground_z + target_height),
+        );
+        for i in 0..nl {
+            let leg = &self.legs[i];
+            let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
+            let state = self.scheduler.leg(i);
+            let (target_body, vel_body) = if state.phase == LegPhase::Swing {
+                let r = state.swing_reference(self.params.lift_height_m, &self.params.reach);
+                let rel = r.pos_m - p_base;
+                let v_rel = r.vel_m_s - v_base - w_base.cross(rel);
+                (rot.transpose() * rel, rot.transpose() * v_rel)
+            } else {
+                (
+                    planned_base.inverse().transform_point(self.feet_world[i]),
+                    DVec3::ZERO,
+                )
+            };
+            let leg_q = &mut self.leg_q[..dof];
+            let leg_qd = &mut self.leg_qd[..dof];
+            let ok = leg
+                .ik_clamped_into(target_body, &self.params.ik, leg_q)
+                .is_ok();
+            if !ok {
+                for k in 0..dof {
+                    leg_q[k] = q[qi[k]];
+                }
+            }
+            if leg
+                .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
+                .is_err()
+            {
+                leg_qd.fill(0.0);
+            }
+            for k in 0..dof {
+                self.q_des[vi[k] - nv0] = leg_q[k];
+            }
+            if state.phase == LegPhase::Swing {
+                for k in 0..dof {
+                    let j = vi[k] - nv0;
+                    let e = leg_q[k] - q[qi[k]];
+                    tau_joints[j] = self.params.swing_kp_nm_per_rad[j] * e
+                        + self.params.swing_kd_nms_per_rad[j] * (leg_qd[k] - v[vi[k]]);
+                }
+            } else if dof == 4 {
+                // quad16's ankle: keep the foot level with the body
+                let (kp, kd) = self.params.ankle_hold;
+                let j = vi[3] - nv0;
+                let mut level = [0.0; 4];
+                let _ = leg.ik_clamped_into(
+                    rot.transpose() * (self.feet_world[i] - p_base),
+                    &self.params.ik,
+                    &mut level,
+                );
+                tau_joints[j] += kp * (level[3] - q[qi[3]]) - kd * v[vi[3]];
+            }
+        }
+        for ((t, lim), h) in tau_joints
+            .iter_mut()
+            .zip(&model.effort_limit[nv0..])
+            .zip(&self.bias)
+        {
+            *t = (*t + h).clamp(-lim, *lim);
+        }
+    }
+}
