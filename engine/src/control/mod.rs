@@ -2,4 +2,7 @@
 //! controller here: a positive joint torque τ accelerates the joint positively
 //! about its axis (the same τ that enters `M q̈ + C q̇ + g = τ + Jᵀ f_ext`).
 
+pub mod active_set;
+pub mod force_qp;
 pub mod joint_pd;
+pub mod vmc;
