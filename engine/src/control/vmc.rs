@@ -136,7 +136,9 @@ impl VmcCommand {
 /// The measured state the controller reads (world frame unless stated).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VmcInput {
-    /// Base origin (m).
+    /// Base origin (m). The springs read the CoM horizontally and
+    /// `height_above_ground_m` vertically; this completes the base pose for
+    /// callers and logs.
     pub base_position_m: DVec3,
     /// Base orientation (world from base).
     pub base_rotation: DMat3,
