@@ -3,7 +3,9 @@
 use clap::{Parser, Subcommand};
 
 pub mod dynamics;
+pub mod export;
 pub mod models;
+pub mod report;
 pub mod run;
 pub mod terrain;
 
@@ -31,6 +33,10 @@ pub enum Command {
     Models(models::ModelsArgs),
     /// Terrain tools: `quadsim terrain export` samples a terrain into a heightmap file.
     Terrain(terrain::TerrainArgs),
+    /// Rebuild a run's summary.json from its log.mcap.
+    Report(report::ReportArgs),
+    /// Export a log.mcap as one CSV per channel (`--csv DIR`).
+    Export(export::ExportArgs),
 }
 
 /// Runs the parsed command line.
@@ -42,5 +48,7 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Dynamics(a) => dynamics::run(a),
         Command::Models(a) => models::run(a),
         Command::Terrain(a) => terrain::run(a),
+        Command::Report(a) => report::run(a),
+        Command::Export(a) => export::run(a),
     }
 }

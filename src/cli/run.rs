@@ -36,6 +36,13 @@ pub struct RunArgs {
     /// No progress bar and no metrics table (summary.json is still written).
     #[arg(long)]
     pub quiet: bool,
+    /// Write no `log.mcap` (summary.json only).
+    #[arg(long)]
+    pub no_log: bool,
+    /// Log rate in Hz (dividing the step rate) or `full` (every step),
+    /// overriding `world.log_rate_hz` (default: the controller rate).
+    #[arg(long, value_name = "HZ|full")]
+    pub log_rate: Option<String>,
 }
 
 /// Arguments of `quadsim check`.
@@ -172,7 +179,42 @@ pub struct RunOutput {
     pub summary: Value,
     /// Where it was written.
     pub out_dir: PathBuf,
+    /// Stopped early by Ctrl-C or SIGTERM (`summary.json` covers the part that ran).
+    pub interrupted: bool,
+    /// What the log writer did (`None` with `--no-log`).
+    pub log: Option<crate::log::WriterStats>,
 }
+
+/// Steps between log samples: `--log-rate`, else `world.log_rate_hz`, else the controller rate.
+fn log_every_steps(a: &RunArgs, scn: &Scenario) -> Result<u64, CliError> {
+    use crate::scenario::format::LogRateSpec;
+    let w = &scn.file.world;
+    let spec = match &a.log_rate {
+        Some(s) => match s.parse::<f64>() {
+            Ok(hz) => LogRateSpec::Hz(hz),
+            Err(_) => LogRateSpec::Named(s.clone()),
+        },
+        None => w
+            .log_rate_hz
+            .clone()
+            .unwrap_or(LogRateSpec::Hz(w.controller_rate_hz)),
+    };
+    spec.every_steps(w.dt_s).map_err(|m| {
+        if a.log_rate.is_some() {
+            bad(format!("--log-rate: {m}"))
+        } else {
+            bad(format!("{}: world.log_rate_hz: {m}", a.scenario.display()))
+        }
+    })
+}
+
+/// Largest base or joint speed before a run counts as diverged (m/s for the
+/// base's linear velocity, rad/s for angular and joint velocities).
+pub const DIVERGED_LINEAR_SPEED_MPS: f64 = 100.0;
+/// See [`DIVERGED_LINEAR_SPEED_MPS`] (rad/s).
+pub const DIVERGED_ANGULAR_SPEED_RADPS: f64 = 1000.0;
+/// Deepest contact penetration before a run counts as diverged (m).
+pub const DIVERGED_PENETRATION_M: f64 = 0.2;
 
 /// Runs `quadsim run`.
 pub fn run(a: RunArgs) -> Result<(), CliError> {
@@ -180,6 +222,22 @@ pub fn run(a: RunArgs) -> Result<(), CliError> {
     if !a.quiet {
         print_table(&out.summary);
         println!("wrote {}", out.out_dir.join("summary.json").display());
+        if let Some(l) = &out.log {
+            println!(
+                "wrote {} ({} messages, {:.1} MB; log writer thread busy {:.3} s)",
+                out.out_dir.join(crate::log::LOG_FILE).display(),
+                l.messages,
+                l.file_bytes as f64 / 1e6,
+                l.busy_s
+            );
+        }
+    }
+    if out.interrupted {
+        eprintln!(
+            "interrupted at t = {} s: log and summary.json cover the part that ran",
+            out.summary["sim_time_s"]
+        );
+        std::process::exit(130);
     }
     Ok(())
 }
@@ -218,19 +276,54 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         b.set_message(scn.name.clone());
         b
     };
+    let log = if a.no_log {
+        None
+    } else {
+        let every = log_every_steps(a, &scn)?;
+        let path = out_dir.join(crate::log::LOG_FILE);
+        Some(
+            crate::log::start_run_log(&scn, &mut world, &path, every)
+                .map_err(|e| bad(e.to_string()))?,
+        )
+    };
+    crate::log::interrupt::arm().map_err(bad)?;
     let start = Instant::now();
     let chunk = (world.steps / 200).max(1);
     let mut done = 0;
-    while done < world.steps {
+    let mut outcome = crate::log::RunOutcome::default();
+    'run: while done < world.steps {
         let n = chunk.min(world.steps - done);
-        world.sim.run(n);
-        done += n;
+        for _ in 0..n {
+            world.sim.step();
+            done += 1;
+            if let Err(e) = check_finite(&world) {
+                outcome.diverged = Some(e.to_string());
+                break 'run;
+            }
+            if crate::log::interrupt::requested() {
+                outcome.interrupted = true;
+                break 'run;
+            }
+        }
         bar.set_position(done);
-        check_finite(&world)?;
     }
     bar.finish_and_clear();
+    crate::log::interrupt::clear();
     let wall = start.elapsed().as_secs_f64();
-    let summary = summary_json(&scn, &world, wall, a.threads);
+    let log_stats = match log {
+        Some(log) => Some(
+            log.finish(&mut world, &outcome)
+                .map_err(|e| bad(e.to_string()))?,
+        ),
+        None => None,
+    };
+    if let Some(d) = outcome.diverged {
+        return Err(CliError::Diverged(d));
+    }
+    let mut summary = summary_json(&scn, &world, wall, a.threads);
+    if outcome.interrupted {
+        summary["interrupted"] = json!(true);
+    }
     let path = out_dir.join("summary.json");
     std::fs::write(
         &path,
@@ -240,26 +333,85 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         path: path.display().to_string(),
         source: e,
     })?;
-    Ok(RunOutput { summary, out_dir })
+    Ok(RunOutput {
+        summary,
+        out_dir,
+        interrupted: outcome.interrupted,
+        log: log_stats,
+    })
 }
 
-/// Stops with an error naming the robot, time and quantity when a state is not finite.
+/// Stops with an error naming the robot, time and quantity when a state is
+/// not finite, a speed explodes (beyond [`DIVERGED_LINEAR_SPEED_MPS`] or
+/// [`DIVERGED_ANGULAR_SPEED_RADPS`]) or a contact sinks beyond
+/// [`DIVERGED_PENETRATION_M`]. Cheap enough to run after every step.
 fn check_finite(world: &World) -> Result<(), CliError> {
     let t = world.sim.clock().time_s;
     for (name, root) in &world.robots {
         let Some(r) = world.sim.robot(*root) else {
             continue;
         };
-        let bad_q = r.state.q.iter().position(|x| !x.is_finite());
-        let bad_v = r.state.v.iter().position(|x| !x.is_finite());
-        if let Some(i) = bad_q.or(bad_v) {
-            let what = if bad_q.is_some() { "q" } else { "v" };
+        let m = &r.model;
+        let (nq0, nv0) = (m.base_nq(), m.base_nv());
+        let joint = |vi: usize| m.joint_name[m.v_body[vi]].as_str();
+        let what = if let Some(i) = r.state.q.iter().position(|x| !x.is_finite()) {
+            Some(if i < nq0 {
+                format!("q[{i}] (base pose) is not finite")
+            } else {
+                format!("joint '{}' angle is not finite", joint(i - nq0 + nv0))
+            })
+        } else if let Some(i) = r.state.v.iter().position(|x| !x.is_finite()) {
+            Some(format!("v[{i}] ({}) is not finite", velocity_name(m, i)))
+        } else {
+            r.state.v.iter().enumerate().find_map(|(i, &x)| {
+                let linear = m.is_floating() && i < 3;
+                let lim = if linear {
+                    DIVERGED_LINEAR_SPEED_MPS
+                } else {
+                    DIVERGED_ANGULAR_SPEED_RADPS
+                };
+                (x.abs() > lim).then(|| {
+                    let unit = if linear { "m/s" } else { "rad/s" };
+                    format!(
+                        "v[{i}] ({}) = {x:.4e} {unit} exceeds {lim} {unit}",
+                        velocity_name(m, i)
+                    )
+                })
+            })
+        }
+        .or_else(|| {
+            r.contact.states.iter().enumerate().find_map(|(i, s)| {
+                (s.penetration_m > DIVERGED_PENETRATION_M).then(|| {
+                    let body = r.contact.points[i].body;
+                    let link = m.frames.iter().find(|f| f.body == body).map_or("?", |f| f.name.as_str());
+                    format!(
+                        "contact point {i} (on link '{link}') penetrates {:.4} m, beyond {DIVERGED_PENETRATION_M} m",
+                        s.penetration_m
+                    )
+                })
+            })
+        });
+        if let Some(what) = what {
             return Err(CliError::Diverged(format!(
-                "robot '{name}' diverged at t = {t:.4} s: {what}[{i}] is not finite (try a smaller world.dt_s or the rk4 integrator)"
+                "robot '{name}' diverged at t = {t:.4} s: {what} (try a smaller world.dt_s or the rk4 integrator)"
             )));
         }
     }
     Ok(())
+}
+
+/// What velocity coordinate `i` is.
+fn velocity_name(m: &quadsim_engine::Model, i: usize) -> String {
+    let nv0 = m.base_nv();
+    if m.is_floating() && i < 6 {
+        let axis = ["x", "y", "z"][i % 3];
+        let kind = if i < 3 { "linear" } else { "angular" };
+        format!("base {kind} velocity {axis}, base frame")
+    } else if i >= nv0 {
+        format!("joint '{}' velocity", m.joint_name[m.v_body[i]])
+    } else {
+        format!("base velocity {i}")
+    }
 }
 
 fn opt(x: Option<f64>) -> Value {

@@ -71,6 +71,45 @@ pub struct WorldSpec {
     /// Height of the default ground plane (m). Default 0.
     #[serde(default)]
     pub default_ground_height_m: f64,
+    /// Rate of `quadsim run`'s log (Hz, dividing the step rate) or `"full"`
+    /// (every step). Default: the controller rate.
+    pub log_rate_hz: Option<LogRateSpec>,
+}
+
+/// A log rate: a frequency (Hz) that divides the step rate, or `"full"` for every step.
+#[derive(Debug, Clone, Deserialize, JsonSchema, PartialEq)]
+#[serde(untagged)]
+pub enum LogRateSpec {
+    /// Samples per second of simulated time.
+    Hz(f64),
+    /// `"full"`: every step.
+    Named(String),
+}
+
+impl LogRateSpec {
+    /// Steps between two log samples at step length `dt_s`, or a message saying why not.
+    pub fn every_steps(&self, dt_s: f64) -> Result<u64, String> {
+        match self {
+            LogRateSpec::Named(n) if n == "full" => Ok(1),
+            LogRateSpec::Named(n) => Err(format!(
+                "unknown log rate '{n}': a rate in Hz or \"full\" (every step)"
+            )),
+            LogRateSpec::Hz(hz) => {
+                let ratio = 1.0 / (dt_s * hz);
+                if !(hz.is_finite() && *hz > 0.0)
+                    || ratio < 1.0 - 1e-9
+                    || (ratio - ratio.round()).abs() > 1e-6
+                {
+                    Err(format!(
+                        "{hz} Hz must be > 0 and divide the step rate 1/dt = {} Hz into a whole number of steps",
+                        1.0 / dt_s
+                    ))
+                } else {
+                    Ok(ratio.round() as u64)
+                }
+            }
+        }
+    }
 }
 
 fn default_dt() -> f64 {
@@ -166,6 +205,13 @@ pub struct RobotSpec {
     /// The controller.
     #[serde(default)]
     pub controller: ControllerSpec,
+    /// Whether `quadsim run` logs this robot's per-step channels. Default true.
+    #[serde(default = "default_true")]
+    pub log: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 /// `[robots.controller]`. Keys beside `kind` depend on the kind.

@@ -148,6 +148,10 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
             ),
         ));
     }
+    if let Some(rate) = &w.log_rate_hz {
+        rate.every_steps(w.dt_s)
+            .map_err(|m| loc.at("world.log_rate_hz", m))?;
+    }
     if w.gravity_mps2.iter().any(|g| !g.is_finite()) {
         return Err(loc.at("world.gravity_mps2", "must be three finite numbers (m/s²)"));
     }

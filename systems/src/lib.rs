@@ -13,6 +13,7 @@ mod compile;
 mod contact;
 mod control;
 mod ground;
+mod log;
 mod metrics;
 mod publish;
 mod schedule;
@@ -25,6 +26,10 @@ pub use compile::{
 pub use contact::{height_above_ground, observe_robot, update_contacts};
 pub use control::{control_robot, run_controllers};
 pub use ground::compile_ground;
+pub use log::{
+    FootLog, LogRecord, LogSink, Logger, RobotInfo, RobotSample, finish_logging, log_step,
+    start_logging, step_time_ns,
+};
 pub use metrics::{record_metrics, record_robot};
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{

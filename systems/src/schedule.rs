@@ -5,6 +5,7 @@ use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleT
 
 use crate::contact::update_contacts;
 use crate::control::run_controllers;
+use crate::log::{Logger, log_step};
 use crate::metrics::record_metrics;
 use crate::publish::{pose_sync_due, sync_link_poses};
 use crate::step::{advance_clock, step_robots};
@@ -127,7 +128,8 @@ pub fn register_integrate(schedule: &mut Schedule) {
     );
 }
 
-/// Registers [`sync_link_poses`], gated by [`pose_sync_due`].
+/// Registers [`record_metrics`], [`sync_link_poses`] (gated by [`pose_sync_due`])
+/// and [`log_step`] (while a [`Logger`] exists).
 pub fn register_publish(schedule: &mut Schedule) {
     schedule.add_systems(record_metrics.in_set(SimSystems::Publish));
     schedule.add_systems(
@@ -135,5 +137,12 @@ pub fn register_publish(schedule: &mut Schedule) {
             .run_if(pose_sync_due)
             .in_set(SimSystems::Publish)
             .after(record_metrics),
+    );
+    // Logging (only while a `Logger` exists): samples the state the step started from.
+    schedule.add_systems(
+        log_step
+            .run_if(resource_exists::<Logger>)
+            .in_set(SimSystems::Publish)
+            .after(sync_link_poses),
     );
 }

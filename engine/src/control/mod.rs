@@ -6,3 +6,4 @@ pub mod active_set;
 pub mod force_qp;
 pub mod joint_pd;
 pub mod vmc;
+pub mod walker;

@@ -68,6 +68,14 @@ pub struct WalkerParams {
     pub ankle_hold: (f64, f64),
     /// Inverse-kinematics options (knee branch, ankle mode).
     pub ik: IkOptions,
+    /// Whether swing legs get the inverse-dynamics feed-forward of their
+    /// reference's joint acceleration (and the stance feet its reaction).
+    pub swing_feedforward: bool,
+    /// Time constant (s) of the first-order filter on the CoM velocity used
+    /// for foot placement (0: unfiltered). quad16's swing legs make the
+    /// body's speed swing by ±0.5 m/s within each step; Raibert's feedback on
+    /// the raw speed then places feet on that recoil.
+    pub velocity_filter_s: f64,
 }
 
 impl WalkerParams {
@@ -123,6 +131,8 @@ impl WalkerParams {
             swing_kd_nms_per_rad: kd,
             ankle_hold: (20.0, 0.3),
             ik: IkOptions::default(),
+            swing_feedforward: true,
+            velocity_filter_s: 0.0,
         }
     }
 }
@@ -196,10 +206,19 @@ pub struct Walker {
     wrench: Force,
     forces: FootForces,
     feet_world: [DVec3; MAX_FEET],
-    /// Joint rows of the nonlinear effects `C(q, v) v + g(q)` (N·m).
-    bias: Vec<f64>,
+    /// Joint velocity targets of the last tick (rad/s, joints only).
+    qd_des: Vec<f64>,
+    /// Generalized accelerations for the inverse dynamics (base rows zero).
+    acc: Vec<f64>,
+    /// Inverse-dynamics generalized forces of the last tick (all rows).
+    tau_id: Vec<f64>,
     leg_q: Vec<f64>,
     leg_qd: Vec<f64>,
+    leg_q2: Vec<f64>,
+    leg_qd2: Vec<f64>,
+    /// Low-passed CoM velocity (heading frame) for foot placement.
+    v_filt: DVec2,
+    v_filt_init: bool,
 }
 
 impl Walker {
@@ -257,9 +276,15 @@ impl Walker {
             wrench: Force::ZERO,
             forces: [DVec3::ZERO; MAX_FEET],
             feet_world: [DVec3::ZERO; MAX_FEET],
-            bias: vec![0.0; nj],
+            qd_des: vec![0.0; nj],
+            acc: vec![0.0; model.nv],
+            tau_id: vec![0.0; model.nv],
             leg_q: vec![0.0; 4],
             leg_qd: vec![0.0; 4],
+            leg_q2: vec![0.0; 4],
+            leg_qd2: vec![0.0; 4],
+            v_filt: DVec2::ZERO,
+            v_filt_init: false,
             params,
         })
     }
@@ -298,10 +323,13 @@ impl Walker {
     /// only) into `tau_joints`. Leaves `data` with kinematics (and RNEA
     /// workspaces) at `(q, v)`; overwrites `data.jacobian`.
     ///
-    /// Every joint also gets its row of the nonlinear effects `C(q, v) v + g(q)`:
-    /// the legs carry their own weight (quad16's legs are 18 of its 28 kg),
-    /// which `τ = −Jᵀ f` alone would leave to the joint PD; for a stance leg
-    /// `τ = h − Jᵀ f` is the exact static hold (`M q̈ + h = τ + Jᵀ f`, q̈ = 0).
+    /// Inverse dynamics with the base held still: `τ_id = RNEA(q, v, a)` with
+    /// `a = [0; q̈_des]`, where swing legs get the joint acceleration of their
+    /// min-jerk reference and stance legs zero. Its joint rows are every
+    /// joint's feed-forward (the legs carry their own weight and the swing
+    /// legs' inertia: quad16's legs are 18 of its 28 kg, and without it 8 Hz
+    /// swing PD diverged even in place). For a stance leg `τ = τ_id − Jᵀ f`
+    /// is the exact static hold (`M q̈ + h = τ + Jᵀ f`, q̈ = 0).
     pub fn tick(
         &mut self,
         model: &Model,
@@ -313,8 +341,7 @@ impl Walker {
     ) {
         let nl = self.legs.len();
         let nv0 = model.base_nv();
-        crate::nle::nonlinear_effects(model, data, q, v);
-        self.bias.copy_from_slice(&data.nle[nv0..]);
+        crate::kinematics::forward_kinematics(model, data, q, v);
         let base = data.pose[0];
         let rot = base.rot;
         let p_base = base.trans;
@@ -334,7 +361,19 @@ impl Walker {
             .update_with_feet(input.dt_s, input.contacts, &self.feet_world[..nl]);
 
         // 2. touchdown targets of swinging legs (Raibert, heading frame)
-        let v_h = (heading.transpose() * com_vel).truncate();
+        let v_now = (heading.transpose() * com_vel).truncate();
+        let tf = self.params.velocity_filter_s;
+        let alpha = if tf > 0.0 {
+            (input.dt_s / tf).min(1.0)
+        } else {
+            1.0
+        };
+        if !self.v_filt_init {
+            self.v_filt = v_now;
+            self.v_filt_init = true;
+        }
+        self.v_filt += alpha * (v_now - self.v_filt);
+        let v_h = self.v_filt;
         let cmd = self.vmc.command;
         let stance_s = self.scheduler.gait().stance_duration_s();
         for i in 0..nl {
@@ -366,9 +405,85 @@ impl Walker {
             self.scheduler.set_touchdown_target(i, target);
         }
 
-        // 3. virtual wrench
+        // 3. per leg: joint targets (swing: IK of the reference, with joint
+        //    velocity and acceleration; stance: the hold at the target height)
         let ground_z = input.terrain.height(p_base.x, p_base.y).unwrap_or(0.0);
-        self.wrench = self.vmc.update(&VmcInput {
+        let target_height = self.vmc.params.base_height_m;
+        let planned_base = crate::spatial::Transform::new(
+            heading,
+            DVec3::new(p_base.x, p_base.y, ground_z + target_height),
+        );
+        self.acc.fill(0.0);
+        for i in 0..nl {
+            let leg = &self.legs[i];
+            let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
+            let state = self.scheduler.leg(i);
+            let swing = state.phase == LegPhase::Swing;
+            let (target_body, vel_body, acc_body) = if swing {
+                let r = state.swing_reference(self.params.lift_height_m, &self.params.reach);
+                let rel = r.pos_m - p_base;
+                let v_rel = r.vel_m_s - v_base - w_base.cross(rel);
+                (
+                    rot.transpose() * rel,
+                    rot.transpose() * v_rel,
+                    rot.transpose() * r.acc_m_s2,
+                )
+            } else {
+                (
+                    planned_base.inverse().transform_point(self.feet_world[i]),
+                    DVec3::ZERO,
+                    DVec3::ZERO,
+                )
+            };
+            let leg_q = &mut self.leg_q[..dof];
+            let leg_qd = &mut self.leg_qd[..dof];
+            if leg
+                .ik_clamped_into(target_body, &self.params.ik, leg_q)
+                .is_err()
+            {
+                for k in 0..dof {
+                    leg_q[k] = q[qi[k]];
+                }
+            }
+            if leg
+                .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
+                .is_err()
+            {
+                leg_qd.fill(0.0);
+            }
+            for k in 0..dof {
+                self.q_des[vi[k] - nv0] = leg_q[k];
+                self.qd_des[vi[k] - nv0] = leg_qd[k];
+            }
+            if swing && self.params.swing_feedforward {
+                // q̈ = d/dt J⁻¹ ṗ by a forward difference along the reference
+                const EPS_S: f64 = 1e-3;
+                let p2 = target_body + vel_body * EPS_S + 0.5 * acc_body * EPS_S * EPS_S;
+                let v2 = vel_body + acc_body * EPS_S;
+                let q2 = &mut self.leg_q2[..dof];
+                let qd2 = &mut self.leg_qd2[..dof];
+                let ok = leg.ik_clamped_into(p2, &self.params.ik, q2).is_ok()
+                    && leg
+                        .joint_velocities_into(q2, v2, &self.params.ik, qd2)
+                        .is_ok();
+                if ok {
+                    for k in 0..dof {
+                        let a = (qd2[k] - self.leg_qd[k]) / EPS_S;
+                        if a.is_finite() {
+                            self.acc[vi[k]] = a;
+                        }
+                    }
+                }
+            }
+        }
+
+        // 4. inverse dynamics with the base held still
+        let tau_id = crate::rnea::rnea(model, data, q, v, &self.acc);
+        self.tau_id.copy_from_slice(tau_id);
+        // 5. virtual wrench (the swing legs' reaction is not added: feeding
+        //    the base rows of τ_id to the QP made quad16 fall even in place —
+        //    the moment about the support diagonal is not realizable)
+        let w = self.vmc.update(&VmcInput {
             base_position_m: p_base,
             base_rotation: rot,
             base_linear_velocity_mps: v_base,
@@ -378,8 +493,9 @@ impl Walker {
             height_above_ground_m: p_base.z - ground_z,
             dt_s: input.dt_s,
         });
+        self.wrench = w;
 
-        // 4. force distribution over loaded stance feet
+        // 6. force distribution over loaded stance feet
         let mut feet = [StanceFoot {
             position_m: DVec3::ZERO,
             normal: DVec3::Z,
@@ -415,59 +531,23 @@ impl Walker {
             Err(_) => [DVec3::ZERO; MAX_FEET],
         };
 
-        // 5. stance torques τ = −Jᵀ f (zero for unloaded or swinging feet)
+        // 7. stance torques τ = −Jᵀ f (zero for unloaded or swinging feet)
         let mut pts = [(0usize, DVec3::ZERO); MAX_FEET];
         for i in 0..nl {
             pts[i] = (self.leg_info[i].body, self.feet_world[i]);
         }
         stance_torques(model, data, &pts[..nl], &self.forces[..nl], tau_joints);
 
-        // 6. per leg: joint targets; swing legs tracked by PD, the stance ankle held
-        let target_height = self.vmc.params.base_height_m;
-        let planned_base = crate::spatial::Transform::new(
-            heading,
-            DVec3::new(p_base.x, p_base.y, ground_z + target_height),
-        );
+        // 8. swing legs tracked by PD about the feed-forward, the stance ankle held
         for i in 0..nl {
             let leg = &self.legs[i];
             let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
-            let state = self.scheduler.leg(i);
-            let (target_body, vel_body) = if state.phase == LegPhase::Swing {
-                let r = state.swing_reference(self.params.lift_height_m, &self.params.reach);
-                let rel = r.pos_m - p_base;
-                let v_rel = r.vel_m_s - v_base - w_base.cross(rel);
-                (rot.transpose() * rel, rot.transpose() * v_rel)
-            } else {
-                (
-                    planned_base.inverse().transform_point(self.feet_world[i]),
-                    DVec3::ZERO,
-                )
-            };
-            let leg_q = &mut self.leg_q[..dof];
-            let leg_qd = &mut self.leg_qd[..dof];
-            let ok = leg
-                .ik_clamped_into(target_body, &self.params.ik, leg_q)
-                .is_ok();
-            if !ok {
-                for k in 0..dof {
-                    leg_q[k] = q[qi[k]];
-                }
-            }
-            if leg
-                .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
-                .is_err()
-            {
-                leg_qd.fill(0.0);
-            }
-            for k in 0..dof {
-                self.q_des[vi[k] - nv0] = leg_q[k];
-            }
-            if state.phase == LegPhase::Swing {
+            if self.scheduler.leg(i).phase == LegPhase::Swing {
                 for k in 0..dof {
                     let j = vi[k] - nv0;
-                    let e = leg_q[k] - q[qi[k]];
+                    let e = self.q_des[j] - q[qi[k]];
                     tau_joints[j] = self.params.swing_kp_nm_per_rad[j] * e
-                        + self.params.swing_kd_nms_per_rad[j] * (leg_qd[k] - v[vi[k]]);
+                        + self.params.swing_kd_nms_per_rad[j] * (self.qd_des[j] - v[vi[k]]);
                 }
             } else if dof == 4 {
                 // quad16's ankle: keep the foot level with the body
@@ -485,7 +565,7 @@ impl Walker {
         for ((t, lim), h) in tau_joints
             .iter_mut()
             .zip(&model.effort_limit[nv0..])
-            .zip(&self.bias)
+            .zip(&self.tau_id[nv0..])
         {
             *t = (*t + h).clamp(-lim, *lim);
         }

@@ -1,0 +1,169 @@
+use glam::DVec3;
+use quadsim_engine::contact::{
+    ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
+};
+use quadsim_engine::control::force_qp::ForceQpParams;
+use quadsim_engine::control::joint_pd::bandwidth_gains;
+use quadsim_engine::control::vmc::{VmcCommand, VmcParams};
+use quadsim_engine::control::walker::{Walker, WalkerInput, WalkerParams};
+use quadsim_engine::gait::Gait;
+use quadsim_engine::gait::placement::PlacementParams;
+use quadsim_engine::gait::scheduler::SchedulerParams;
+use quadsim_engine::gait::swing::ReachDown;
+use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
+use quadsim_engine::kinematics::forward_kinematics;
+use quadsim_engine::legs::ik::IkOptions;
+use quadsim_engine::model::{BaseKind, Model};
+use quadsim_engine::terrain::TerrainUnion;
+use quadsim_engine::{Data, robots};
+
+fn main() {
+    let args: Vec<f64> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse().unwrap())
+        .collect();
+    let vx = args.first().copied().unwrap_or(1.5);
+    let bw = args.get(1).copied().unwrap_or(8.0);
+    let desc = robots::builtin("quad16").unwrap();
+    let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+    let mut data = Data::new(&model);
+    let mut q = robots::nominal_q("quad16").unwrap();
+    let (kp, kd) = bandwidth_gains(&model, &mut data, &q, bw, 1.0);
+    let params = WalkerParams {
+        gait: if args.get(2).copied().unwrap_or(1.0) == 0.0 {
+            Gait::stand()
+        } else {
+            Gait::study_a_trot()
+        },
+        scheduler: SchedulerParams::default(),
+        vmc: {
+            let mut p = VmcParams::for_model(&model);
+            let env = |k: &str, d: f64| {
+                std::env::var(k)
+                    .ok()
+                    .and_then(|x| x.parse().ok())
+                    .unwrap_or(d)
+            };
+            p.gains.stiffness_nm_per_rad *= env("KR", 1.0);
+            p.gains.damping_nms_per_rad *= env("KRD", 1.0);
+            p.gains.damping_nspm *= env("KD", 1.0);
+            p
+        },
+        command: VmcCommand {
+            forward_mps: vx,
+            lateral_mps: 0.0,
+            yaw_rate_radps: 0.0,
+        },
+        qp: ForceQpParams::default(),
+        placement: PlacementParams::default(),
+        lift_height_m: args.get(3).copied().unwrap_or(0.17),
+        reach: ReachDown::default(),
+        swing_kp_nm_per_rad: kp,
+        swing_kd_nms_per_rad: kd,
+        ankle_hold: (20.0, 0.3),
+        ik: IkOptions::default(),
+        swing_feedforward: std::env::var("NOFF").is_err(),
+        velocity_filter_s: std::env::var("VF")
+            .ok()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0.0),
+    };
+    let mut walker = Walker::new(&desc, &model, params).unwrap();
+    let terrain = TerrainUnion::flat(0.0, GroundMaterial::preset("concrete").unwrap());
+    let points = ContactPoint::feet(&model, &desc);
+    let mut states = vec![ContactState::default(); points.len()];
+    q[2] += 0.0;
+    let mut st = State {
+        q,
+        v: vec![0.0; model.nv],
+    };
+    let mut ws = StepWorkspace::new(&model);
+    let mut tau = vec![0.0; model.nv];
+    let dt = 0.0005;
+    let mut tj = vec![0.0; model.nv - 6];
+    for k in 0..(10.0 / dt) as usize {
+        forward_kinematics(&model, &mut data, &st.q, &st.v);
+        update_after_step(&points, &data, &terrain, &mut states);
+        let every: usize = std::env::var("EVERY")
+            .ok()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(4);
+        if k % every == 0 {
+            let contacts: Vec<bool> = states.iter().map(|s| s.in_contact).collect();
+            let normals: Vec<DVec3> = states.iter().map(|s| s.normal).collect();
+            walker.tick(
+                &model,
+                &mut data,
+                &st.q,
+                &st.v,
+                &WalkerInput {
+                    dt_s: every as f64 * dt,
+                    terrain: &terrain,
+                    contacts: &contacts,
+                    normals: &normals,
+                },
+                &mut tj,
+            );
+            tau[6..].copy_from_slice(&tj);
+        }
+        let mut f = ContactForces {
+            terrain: &terrain,
+            points: &points,
+            states: &states,
+        };
+        step(
+            &model,
+            &mut data,
+            &mut ws,
+            &mut st,
+            &tau,
+            dt,
+            Integrator::SemiImplicitEuler,
+            &mut f,
+        );
+        if std::env::var("FINE").is_ok() && (1000..1400).contains(&k) && k % 20 == 0 {
+            let qd = walker.joint_targets();
+            println!(
+                "  t={:.3} LF q={:.3?} qdes={:.3?} tau={:.1?} roll={:.3} f={:.0?}",
+                k as f64 * dt,
+                &st.q[7..11],
+                &qd[0..4],
+                &tj[0..4],
+                2.0 * st.q[3],
+                walker.foot_forces().iter().map(|f| f.z).collect::<Vec<_>>()
+            );
+        }
+        if k % std::env::var("PR")
+            .ok()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(500)
+            == 0
+        {
+            let w = walker.wrench();
+            println!(
+                "t={:.2} x={:.3} z={:.3} vx={:.2} rpy=({:.3},{:.3}) stance={:?} W=({:.0},{:.0},{:.0}) tau0={:.1?}",
+                k as f64 * dt,
+                st.q[0],
+                st.q[2],
+                st.v[0],
+                2.0 * st.q[3],
+                2.0 * st.q[4],
+                walker
+                    .scheduler()
+                    .stance_mask()
+                    .iter()
+                    .take(4)
+                    .map(|&b| b as u8)
+                    .collect::<Vec<_>>(),
+                w.lin.x,
+                w.lin.z,
+                w.ang.y,
+                &tj[0..4]
+            );
+        }
+        if !st.q[2].is_finite() || st.q[2] < 0.2 {
+            println!("fell at {k}");
+            break;
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! Reading a log back: every message in file order with its topic and schema,
+//! and the metadata records. The reader streams from the start and does not
+//! need the summary section, so a file cut short (a killed process) yields
+//! every message of its complete chunks; [`LogContents::error`] then says
+//! where reading stopped.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use mcap::read::{LinearReader, Options};
+use mcap::records::Record;
+use serde_json::Value;
+
+use super::writer::LogError;
+
+/// One message of the log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogMessage {
+    /// Its channel's topic.
+    pub topic: String,
+    /// Its channel's schema name (empty when none).
+    pub schema: String,
+    /// Log time (ns of simulation time).
+    pub log_time_ns: u64,
+    /// The encoded message (JSON).
+    pub data: Vec<u8>,
+}
+
+impl LogMessage {
+    /// Log time in seconds.
+    pub fn t_s(&self) -> f64 {
+        self.log_time_ns as f64 * 1e-9
+    }
+
+    /// The message decoded as JSON.
+    pub fn json(&self) -> Result<Value, serde_json::Error> {
+        serde_json::from_slice(&self.data)
+    }
+}
+
+/// What a log holds.
+#[derive(Debug, Clone, Default)]
+pub struct LogContents {
+    /// Messages in file order.
+    pub messages: Vec<LogMessage>,
+    /// Metadata records by name (a later record of the same name wins).
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// Schema text (JSON Schema) by schema name.
+    pub schemas: BTreeMap<String, String>,
+    /// Why reading stopped early (a truncated or damaged file), if it did.
+    pub error: Option<String>,
+}
+
+impl LogContents {
+    /// Messages on `topic`, in order.
+    pub fn topic<'a>(&'a self, topic: &'a str) -> impl Iterator<Item = &'a LogMessage> + 'a {
+        self.messages.iter().filter(move |m| m.topic == topic)
+    }
+
+    /// Topics in order of first appearance.
+    pub fn topics(&self) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for m in &self.messages {
+            if !out.iter().any(|t| t == &m.topic) {
+                out.push(m.topic.clone());
+            }
+        }
+        out
+    }
+
+    /// A metadata value.
+    pub fn meta(&self, record: &str, key: &str) -> Option<&str> {
+        self.metadata.get(record)?.get(key).map(String::as_str)
+    }
+}
+
+/// Reads the log at `path`.
+pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
+    let buf = std::fs::read(path).map_err(|e| LogError {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let c = read_log_bytes(&buf);
+    if c.messages.is_empty()
+        && c.metadata.is_empty()
+        && let Some(e) = &c.error
+    {
+        return Err(LogError {
+            path: path.display().to_string(),
+            message: format!("not a readable MCAP log: {e}"),
+        });
+    }
+    Ok(c)
+}
+
+/// Reads a log from memory, tolerating a missing end (summary, footer, magic).
+pub fn read_log_bytes(buf: &[u8]) -> LogContents {
+    let mut out = LogContents::default();
+    match mcap::MessageStream::new_with_options(buf, Options::IgnoreEndMagic.into()) {
+        Ok(stream) => {
+            for m in stream {
+                match m {
+                    Ok(m) => {
+                        let (schema, text) = m.channel.schema.as_ref().map_or_else(
+                            || (String::new(), None),
+                            |s| (s.name.clone(), Some(&s.data)),
+                        );
+                        if let Some(text) = text
+                            && !out.schemas.contains_key(&schema)
+                        {
+                            out.schemas
+                                .insert(schema.clone(), String::from_utf8_lossy(text).into());
+                        }
+                        out.messages.push(LogMessage {
+                            topic: m.channel.topic.clone(),
+                            schema,
+                            log_time_ns: m.log_time,
+                            data: m.data.into_owned(),
+                        });
+                    }
+                    Err(e) => {
+                        out.error = Some(e.to_string());
+                        break;
+                    }
+                }
+            }
+        }
+        Err(e) => out.error = Some(e.to_string()),
+    }
+    // Metadata records sit between chunks; read them with the record reader.
+    if let Ok(records) = LinearReader::new_with_options(buf, Options::IgnoreEndMagic.into()) {
+        for r in records {
+            match r {
+                Ok(Record::Metadata(m)) => {
+                    out.metadata.insert(m.name, m.metadata);
+                }
+                Ok(_) => {}
+                Err(e) => {
+                    out.error.get_or_insert_with(|| e.to_string());
+                    break;
+                }
+            }
+        }
+    }
+    out
+}

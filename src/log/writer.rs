@@ -1,0 +1,316 @@
+//! The MCAP writer: a thread that owns the file, encodes records as JSON and
+//! writes them into zstd-compressed chunks. The simulation thread only sends
+//! owned records over a bounded channel ([`McapLog::sink`]), so encoding and
+//! compression run beside the simulation; when the writer falls behind, the
+//! channel fills and the simulation waits (nothing is dropped).
+//!
+//! Determinism: the file depends only on the sequence of records. The header
+//! holds fixed strings (no library version, no wall-clock time anywhere),
+//! compression is single-threaded zstd at a fixed level, and channel ids are
+//! given in first-use order. Two runs of one scenario write identical bytes.
+//!
+//! Durability: the file is written without a user-space buffer, so every
+//! finished chunk is in the operating system's hands at once; a killed
+//! process leaves a file whose complete chunks a streaming reader recovers
+//! (see [`super::read`]).
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use mcap::records::Metadata;
+use mcap::{Compression, WriteOptions, Writer};
+use quadsim_systems::{LogRecord, LogSink};
+
+use super::encode::{
+    GroundMesh, RobotNames, RobotTopic, encode_robot, encode_scene, encode_transforms,
+};
+use super::schema::Schema;
+
+/// The MCAP profile string written in the header (fixed, for byte-identical files).
+pub const PROFILE: &str = "";
+/// The library string written in the header (fixed, for byte-identical files).
+pub const LIBRARY: &str = "quadsim";
+/// Message encoding of every channel.
+pub const MESSAGE_ENCODING: &str = "json";
+/// Schema encoding of every schema.
+pub const SCHEMA_ENCODING: &str = "jsonschema";
+/// Uncompressed chunk size (bytes): what a killed process can lose at most.
+pub const CHUNK_SIZE_BYTES: u64 = 512 * 1024;
+/// zstd level (fast; the JSON text compresses about 5:1).
+pub const ZSTD_LEVEL: u32 = 1;
+/// Records in flight between the simulation and the writer thread.
+pub const CHANNEL_CAPACITY: usize = 256;
+/// Topic of the link transforms.
+pub const TF_TOPIC: &str = "/tf";
+/// Topic of the 3D scene.
+pub const SCENE_TOPIC: &str = "/scene";
+/// Topic of the terrain description.
+pub const TERRAIN_TOPIC: &str = "/terrain";
+
+/// A log I/O or encoding failure, naming the file.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct LogError {
+    /// The log file.
+    pub path: String,
+    /// What failed.
+    pub message: String,
+}
+
+/// What the writer thread did, for the run's report and the docs' cost figures.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct WriterStats {
+    /// Messages written.
+    pub messages: u64,
+    /// Bytes of the finished file.
+    pub file_bytes: u64,
+    /// Time the writer thread spent encoding and writing (s), i.e. the share
+    /// of a core it used; waiting for records is not counted.
+    pub busy_s: f64,
+}
+
+enum Cmd {
+    Record(LogRecord),
+    Json {
+        topic: String,
+        schema: Schema,
+        t_ns: u64,
+        data: Vec<u8>,
+    },
+    Metadata(String, BTreeMap<String, String>),
+    Finish,
+}
+
+/// The sink handed to the simulation's [`quadsim_systems::Logger`].
+struct ChannelSink {
+    tx: SyncSender<Cmd>,
+}
+
+impl LogSink for ChannelSink {
+    fn send(&mut self, record: LogRecord) {
+        // A send fails only when the writer thread stopped on an error; the
+        // error is reported by `McapLog::finish`.
+        let _ = self.tx.send(Cmd::Record(record));
+    }
+}
+
+/// An MCAP log being written.
+#[derive(Debug)]
+pub struct McapLog {
+    tx: SyncSender<Cmd>,
+    thread: Option<JoinHandle<Result<WriterStats, String>>>,
+    path: PathBuf,
+}
+
+impl McapLog {
+    /// Creates `path` and starts the writer thread. `metadata` records are
+    /// written first (outside chunks, so a truncated file keeps them);
+    /// `ground` is drawn in the 3D scene.
+    pub fn create(
+        path: &Path,
+        metadata: Vec<(String, BTreeMap<String, String>)>,
+        ground: GroundMesh,
+    ) -> Result<McapLog, LogError> {
+        let err = |message: String| LogError {
+            path: path.display().to_string(),
+            message,
+        };
+        let file = File::create(path).map_err(|e| err(e.to_string()))?;
+        let mut writer = WriteOptions::new()
+            .profile(PROFILE)
+            .library(LIBRARY)
+            .compression(Some(Compression::Zstd))
+            .compression_level(ZSTD_LEVEL)
+            .compression_threads(0)
+            .chunk_size(Some(CHUNK_SIZE_BYTES))
+            .create(file)
+            .map_err(|e| err(e.to_string()))?;
+        for (name, map) in metadata {
+            writer
+                .write_metadata(&Metadata {
+                    name,
+                    metadata: map,
+                })
+                .map_err(|e| err(e.to_string()))?;
+        }
+        let (tx, rx) = sync_channel(CHANNEL_CAPACITY);
+        let thread = std::thread::Builder::new()
+            .name("quadsim-log".into())
+            .spawn(move || write_loop(writer, rx, ground))
+            .map_err(|e| err(e.to_string()))?;
+        Ok(McapLog {
+            tx,
+            thread: Some(thread),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// A sink for the simulation's logger.
+    pub fn sink(&self) -> Box<dyn LogSink> {
+        Box::new(ChannelSink {
+            tx: self.tx.clone(),
+        })
+    }
+
+    /// Writes one JSON message on `topic` (registered on first use with `schema`).
+    pub fn write_json(&self, topic: &str, schema: Schema, t_ns: u64, value: &serde_json::Value) {
+        let data = serde_json::to_vec(value).expect("serialising to memory cannot fail");
+        let _ = self.tx.send(Cmd::Json {
+            topic: topic.to_string(),
+            schema,
+            t_ns,
+            data,
+        });
+    }
+
+    /// Writes a metadata record.
+    pub fn write_metadata(&self, name: &str, map: BTreeMap<String, String>) {
+        let _ = self.tx.send(Cmd::Metadata(name.to_string(), map));
+    }
+
+    /// Finishes the file (summary section and index) and waits for the thread.
+    pub fn finish(mut self) -> Result<WriterStats, LogError> {
+        let _ = self.tx.send(Cmd::Finish);
+        let thread = self.thread.take().expect("finish runs once");
+        thread
+            .join()
+            .map_err(|_| "the log writer thread panicked".to_string())
+            .and_then(|r| r)
+            .map_err(|message| LogError {
+                path: self.path.display().to_string(),
+                message,
+            })
+    }
+}
+
+/// Channel ids by topic, registering schemas and channels on first use.
+struct Channels {
+    schemas: BTreeMap<Schema, u16>,
+    topics: BTreeMap<String, u16>,
+}
+
+impl Channels {
+    fn id(&mut self, w: &mut Writer<File>, topic: &str, schema: Schema) -> Result<u16, String> {
+        if let Some(&id) = self.topics.get(topic) {
+            return Ok(id);
+        }
+        let schema_id = match self.schemas.get(&schema) {
+            Some(&id) => id,
+            None => {
+                let text = serde_json::to_vec(&schema.json()).expect("schema serialises");
+                let id = w
+                    .add_schema(schema.name(), SCHEMA_ENCODING, &text)
+                    .map_err(|e| e.to_string())?;
+                self.schemas.insert(schema, id);
+                id
+            }
+        };
+        let id = w
+            .add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())
+            .map_err(|e| e.to_string())?;
+        self.topics.insert(topic.to_string(), id);
+        Ok(id)
+    }
+}
+
+fn write_loop(
+    mut w: Writer<File>,
+    rx: Receiver<Cmd>,
+    ground: GroundMesh,
+) -> Result<WriterStats, String> {
+    let mut channels = Channels {
+        schemas: BTreeMap::new(),
+        topics: BTreeMap::new(),
+    };
+    let mut names: Vec<RobotNames> = Vec::new();
+    let mut topics: Vec<Vec<String>> = Vec::new();
+    let mut buf = Vec::with_capacity(16 * 1024);
+    let mut stats = WriterStats::default();
+    let mut busy = Duration::ZERO;
+    let mut scenes = 0u32;
+    let mut seq = 0u32;
+    let mut put = |w: &mut Writer<File>, channel: u16, t_ns: u64, data: &[u8]| {
+        seq = seq.wrapping_add(1);
+        w.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: seq,
+                log_time: t_ns,
+                publish_time: t_ns,
+            },
+            data,
+        )
+        .map_err(|e| e.to_string())
+    };
+    while let Ok(cmd) = rx.recv() {
+        let start = Instant::now();
+        match cmd {
+            Cmd::Record(LogRecord::Robots { t_ns, robots }) => {
+                names = robots.iter().map(RobotNames::new).collect();
+                topics = robots
+                    .iter()
+                    .map(|r| RobotTopic::ALL.iter().map(|t| t.topic(&r.name)).collect())
+                    .collect();
+                encode_scene(&robots, &ground, t_ns, scenes > 0, &mut buf);
+                scenes += 1;
+                let id = channels.id(&mut w, SCENE_TOPIC, Schema::SceneUpdate)?;
+                put(&mut w, id, t_ns, &buf)?;
+                stats.messages += 1;
+            }
+            Cmd::Record(LogRecord::Step { t_ns, samples }) => {
+                for s in &samples {
+                    let (Some(n), Some(tp)) = (names.get(s.robot), topics.get(s.robot)) else {
+                        continue;
+                    };
+                    for (topic, name) in RobotTopic::ALL.iter().zip(tp) {
+                        encode_robot(*topic, n, s, t_ns, &mut buf);
+                        let id = channels.id(&mut w, name, topic.schema())?;
+                        put(&mut w, id, t_ns, &buf)?;
+                        stats.messages += 1;
+                    }
+                }
+                let with_names: Vec<_> = samples
+                    .iter()
+                    .filter_map(|s| names.get(s.robot).map(|n| (n, s)))
+                    .collect();
+                if !with_names.is_empty() {
+                    encode_transforms(&with_names, t_ns, &mut buf);
+                    let id = channels.id(&mut w, TF_TOPIC, Schema::FrameTransforms)?;
+                    put(&mut w, id, t_ns, &buf)?;
+                    stats.messages += 1;
+                }
+            }
+            Cmd::Json {
+                topic,
+                schema,
+                t_ns,
+                data,
+            } => {
+                let id = channels.id(&mut w, &topic, schema)?;
+                put(&mut w, id, t_ns, &data)?;
+                stats.messages += 1;
+            }
+            Cmd::Metadata(name, metadata) => {
+                w.write_metadata(&Metadata { name, metadata })
+                    .map_err(|e| e.to_string())?;
+            }
+            Cmd::Finish => {
+                w.finish().map_err(|e| e.to_string())?;
+                let file = w.into_inner();
+                stats.file_bytes = file.metadata().map(|m| m.len()).unwrap_or(0);
+                busy += start.elapsed();
+                stats.busy_s = busy.as_secs_f64();
+                return Ok(stats);
+            }
+        }
+        busy += start.elapsed();
+    }
+    // every sender dropped without `Finish`: still close the file properly
+    w.finish().map_err(|e| e.to_string())?;
+    stats.busy_s = busy.as_secs_f64();
+    Ok(stats)
+}

@@ -1,0 +1,435 @@
+//! Logging: samples of every logged robot taken from the simulation in the
+//! `Publish` stage and handed to a [`LogSink`] (the root crate's MCAP writer).
+//!
+//! # What a sample holds, and when
+//! A step runs `Control → Contact → … → Integrate → Publish` and takes the
+//! state from `t_j = j·dt` to `t_{j+1}`. Everything the simulation computed
+//! *at* `t_j` is still at hand in that step's `Publish` stage: the state
+//! `(q_j, v_j)` (kept here as a snapshot, because integration has overwritten
+//! the robot's own copy), the [`Observation`](quadsim_components::Observation)
+//! of the `Contact` stage (CoM, contact points), the contact forces evaluated
+//! at `t_j`, and the actuator command applied over the step. So the sample for
+//! `t_j` is written in step `j`'s `Publish` stage, with nothing recomputed but
+//! forward kinematics of the snapshot (for link poses and the base twist).
+//! The state after the last step, `t_N`, is sampled by [`finish_logging`],
+//! which runs the `Contact` and `Control` systems once more at that state,
+//! exactly as the next step would.
+//!
+//! Samples are taken when `j` is a multiple of [`Logger::every_steps`], so a
+//! run of `N` steps logs `⌊N / every⌋ + 1` samples, `t = 0` included.
+//!
+//! The sampling is cheap (one forward-kinematics pass and a few copies);
+//! encoding and compression happen in the sink, off the simulation thread.
+
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::system::RunSystemOnce;
+use glam::{DQuat, DVec3};
+use quadsim_components::{
+    ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, describe_robot,
+};
+use quadsim_engine::description::RobotDescription;
+use quadsim_engine::kinematics::{forward_kinematics, frame_pose};
+use quadsim_engine::spatial::{Transform, rpy_from_rot};
+use quadsim_engine::{Data, Model};
+
+use crate::contact::update_contacts;
+use crate::control::run_controllers;
+
+/// Where samples go. Implementations must not block for long: `send` runs on
+/// the simulation thread (the MCAP sink forwards records to a writer thread).
+pub trait LogSink: Send + Sync + 'static {
+    /// Takes one record; records arrive in simulation-time order.
+    fn send(&mut self, record: LogRecord);
+}
+
+/// One robot's static description, sent before its first sample and again
+/// whenever its model is recompiled.
+#[derive(Clone, Debug)]
+pub struct RobotInfo {
+    /// Instance name (the scenario's `robots[].name`).
+    pub name: String,
+    /// The compiled model (joint, link and foot names; sizes).
+    pub model: Arc<Model>,
+    /// The description (link shapes for a 3D scene).
+    pub description: RobotDescription,
+    /// Whether per-step samples are logged for this robot.
+    pub logged: bool,
+}
+
+impl RobotInfo {
+    /// Names of the actuated joints, in velocity order (nv − base).
+    pub fn joint_names(&self) -> Vec<String> {
+        let m = &self.model;
+        (m.base_nv()..m.nv)
+            .map(|i| m.joint_name[m.v_body[i]].clone())
+            .collect()
+    }
+
+    /// Names of the feet, in the model's foot order.
+    pub fn foot_names(&self) -> Vec<String> {
+        self.model
+            .feet
+            .iter()
+            .map(|&f| self.model.frames[f].name.clone())
+            .collect()
+    }
+}
+
+/// One foot at the sample's instant (world frame, SI).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FootLog {
+    /// The foot sphere touches the ground.
+    pub in_contact: bool,
+    /// Friction is at the cone's limit (the foot slides).
+    pub slipping: bool,
+    /// Penetration depth (m, ≥ 0).
+    pub penetration_m: f64,
+    /// Normal force magnitude (N, ≥ 0).
+    pub normal_force_n: f64,
+    /// Ground reaction force on the foot (N, world).
+    pub force_n: DVec3,
+    /// Contact point: the sphere's lowest point along the ground normal (m, world).
+    pub position_m: DVec3,
+}
+
+/// One robot at one instant `t_j`. Frames: `world` is z up; "base" quantities
+/// are the root link's frame origin; twists are of that origin, in world axes.
+#[derive(Clone, Debug)]
+pub struct RobotSample {
+    /// Index of the robot in the last [`LogRecord::Robots`] list.
+    pub robot: usize,
+    /// Generalised position (Pinocchio conventions, nq).
+    pub q: Vec<f64>,
+    /// Generalised velocity (nv): base twist in the base frame, then joints.
+    pub v: Vec<f64>,
+    /// Base pose in the world.
+    pub base_position_m: DVec3,
+    /// Base orientation (base → world, unit quaternion).
+    pub base_orientation: DQuat,
+    /// Velocity of the base origin (m/s, world axes).
+    pub base_linear_mps: DVec3,
+    /// Angular velocity of the base (rad/s, world axes).
+    pub base_angular_radps: DVec3,
+    /// Roll, pitch, yaw of the base (rad; `R = Rz(yaw) Ry(pitch) Rx(roll)`).
+    pub rpy_rad: DVec3,
+    /// Whole-body centre of mass (m, world).
+    pub com_m: DVec3,
+    /// CoM velocity (m/s, world).
+    pub com_velocity_mps: DVec3,
+    /// CoM acceleration (m/s², world): Newton's law with the external forces
+    /// evaluated at this instant, `g + (Σ contact forces + Σ active pushes) / m`.
+    pub com_acceleration_mps2: DVec3,
+    /// Joint angles (rad) and velocities (rad/s), velocity order.
+    pub joint_position: Vec<f64>,
+    /// Joint velocities (rad/s).
+    pub joint_velocity: Vec<f64>,
+    /// Actuator torques that act over the step (N·m): the command after saturation.
+    pub joint_effort: Vec<f64>,
+    /// The controller's command before saturation (N·m).
+    pub joint_effort_command: Vec<f64>,
+    /// Joint targets of the controller (rad), when it tracks some.
+    pub joint_position_desired: Option<Vec<f64>>,
+    /// Desired joint velocities (rad/s), when the controller has targets.
+    pub joint_velocity_desired: Option<Vec<f64>>,
+    /// Feet in the model's foot order.
+    pub feet: Vec<FootLog>,
+    /// World pose of every link frame (one per `model.frames` entry).
+    pub link_poses: Vec<Transform>,
+}
+
+/// What the logger hands to its sink.
+#[derive(Clone, Debug)]
+pub enum LogRecord {
+    /// Every robot of the world (logged or not) in the logger's order.
+    Robots {
+        /// Simulation time (ns).
+        t_ns: u64,
+        /// The robots.
+        robots: Vec<RobotInfo>,
+    },
+    /// Samples of every logged robot at one instant.
+    Step {
+        /// Simulation time (ns).
+        t_ns: u64,
+        /// One sample per logged robot, in the logger's order.
+        samples: Vec<RobotSample>,
+    },
+}
+
+/// A robot the logger follows.
+#[derive(Debug)]
+struct Followed {
+    entity: Entity,
+    logged: bool,
+    /// Model the snapshot belongs to.
+    model: Option<Arc<Model>>,
+    /// Kinematics scratch for the snapshot (the robot's own `data` is the step's).
+    data: Option<Data>,
+    /// `(q, v)` at the start of the current step.
+    q: Vec<f64>,
+    v: Vec<f64>,
+}
+
+/// The logging resource: which robots, how often, and the sink. Present only
+/// while a log is being written ([`start_logging`] … [`finish_logging`]).
+#[derive(Resource)]
+pub struct Logger {
+    /// A sample every this many steps (≥ 1).
+    pub every_steps: u64,
+    robots: Vec<Followed>,
+    sink: Box<dyn LogSink>,
+    /// Step index of the last sample written.
+    last_sampled: Option<u64>,
+}
+
+impl std::fmt::Debug for Logger {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Logger")
+            .field("every_steps", &self.every_steps)
+            .field("robots", &self.robots.len())
+            .field("last_sampled", &self.last_sampled)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Simulation time of step index `j` (ns), from the step count so it does not drift.
+pub fn step_time_ns(step: u64, dt_s: f64) -> u64 {
+    (step as f64 * dt_s * 1e9).round() as u64
+}
+
+/// Starts a log: snapshots every robot's state, sends the [`LogRecord::Robots`]
+/// record and inserts the [`Logger`]. `robots` lists root entities in the
+/// order the log should follow, each with whether per-step samples are taken.
+pub fn start_logging(
+    world: &mut World,
+    sink: Box<dyn LogSink>,
+    every_steps: u64,
+    robots: &[(Entity, bool)],
+) {
+    let mut logger = Logger {
+        every_steps: every_steps.max(1),
+        robots: robots
+            .iter()
+            .map(|&(entity, logged)| Followed {
+                entity,
+                logged,
+                model: None,
+                data: None,
+                q: Vec::new(),
+                v: Vec::new(),
+            })
+            .collect(),
+        sink,
+        last_sampled: None,
+    };
+    announce_if_changed(world, &mut logger, true);
+    snapshot(world, &mut logger);
+    world.insert_resource(logger);
+}
+
+/// Ends the log: when `final_sample` is set and the current step index is a
+/// multiple of the rate, samples the current state (running the `Contact` and
+/// `Control` systems at it first, as the next step would; the state itself is
+/// not changed). Removes the [`Logger`] and returns its sink.
+pub fn finish_logging(world: &mut World, final_sample: bool) -> Option<Box<dyn LogSink>> {
+    let n = world.resource::<SimClock>().step;
+    let due = world
+        .get_resource::<Logger>()
+        .map(|l| n.is_multiple_of(l.every_steps) && l.last_sampled != Some(n))?;
+    if final_sample && due {
+        world
+            .run_system_once(update_contacts)
+            .expect("the simulation's resources exist");
+        if world.contains_resource::<ControlRate>() {
+            world
+                .run_system_once(run_controllers)
+                .expect("the simulation's resources exist");
+        }
+        world.resource_scope(|world, mut logger: Mut<Logger>| {
+            sample_all(world, &mut logger, n);
+        });
+    }
+    world.remove_resource::<Logger>().map(|l| l.sink)
+}
+
+/// The `Publish`-stage system: samples the state the step started from when
+/// its index is due, then snapshots the new state for the next step.
+pub fn log_step(world: &mut World) {
+    world.resource_scope(|world, mut logger: Mut<Logger>| {
+        let step = world.resource::<SimClock>().step;
+        let j = step.saturating_sub(1);
+        if step > 0 && j.is_multiple_of(logger.every_steps) && logger.last_sampled != Some(j) {
+            sample_all(world, &mut logger, j);
+        }
+        announce_if_changed(world, &mut logger, false);
+        snapshot(world, &mut logger);
+    });
+}
+
+fn robot_sim(world: &World, entity: Entity) -> Option<&RobotSim> {
+    let index = *world.get::<RobotIndex>(entity)?;
+    world.resource::<RobotBatch>().get(index)
+}
+
+/// Sends the robot list when it is new or a model was recompiled.
+fn announce_if_changed(world: &World, logger: &mut Logger, force: bool) {
+    let changed = logger.robots.iter().any(|r| {
+        let now = robot_sim(world, r.entity).map(|s| &s.model);
+        match (now, &r.model) {
+            (Some(a), Some(b)) => !Arc::ptr_eq(a, b),
+            (None, None) => false,
+            _ => true,
+        }
+    });
+    if !(force || changed) {
+        return;
+    }
+    let dt = world
+        .get_resource::<quadsim_components::SimConfig>()
+        .map_or(0.0, |c| c.dt_s);
+    let t_ns = step_time_ns(world.resource::<SimClock>().step, dt);
+    let robots = logger
+        .robots
+        .iter()
+        .filter_map(|r| {
+            let sim = robot_sim(world, r.entity)?;
+            let name = world
+                .get::<Robot>(r.entity)
+                .map_or_else(|| sim.model.name.clone(), |x| x.name.clone());
+            Some(RobotInfo {
+                name,
+                model: sim.model.clone(),
+                description: describe_robot(world, r.entity).unwrap_or_default(),
+                logged: r.logged,
+            })
+        })
+        .collect();
+    logger.sink.send(LogRecord::Robots { t_ns, robots });
+}
+
+/// Copies every followed robot's `(q, v)` (and its model) for the next sample.
+fn snapshot(world: &World, logger: &mut Logger) {
+    for r in &mut logger.robots {
+        let Some(sim) = robot_sim(world, r.entity) else {
+            r.model = None;
+            continue;
+        };
+        if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
+            r.data = Some(Data::new(&sim.model));
+            r.model = Some(sim.model.clone());
+        }
+        r.q.clear();
+        r.q.extend_from_slice(&sim.state.q);
+        r.v.clear();
+        r.v.extend_from_slice(&sim.state.v);
+    }
+}
+
+/// Samples every logged robot at step index `j` and sends one record.
+fn sample_all(world: &World, logger: &mut Logger, j: u64) {
+    let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
+    let mut samples = Vec::new();
+    // indices follow the `Robots` record, which lists robots that have a sim
+    let mut index = 0;
+    for r in &mut logger.robots {
+        let Some(sim) = robot_sim(world, r.entity) else {
+            continue;
+        };
+        let i = index;
+        index += 1;
+        if !r.logged || r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
+            continue;
+        }
+        let data = r.data.as_mut().expect("snapshot made data");
+        samples.push(sample_robot(i, sim, &r.q, &r.v, data));
+    }
+    logger.last_sampled = Some(j);
+    logger.sink.send(LogRecord::Step {
+        t_ns: step_time_ns(j, dt),
+        samples,
+    });
+}
+
+/// One robot's sample from the snapshot `(q, v)` at `t_j` and what the
+/// simulation computed at `t_j` (observation, contact states, command).
+fn sample_robot(
+    index: usize,
+    sim: &RobotSim,
+    q: &[f64],
+    v: &[f64],
+    data: &mut Data,
+) -> RobotSample {
+    let model = &sim.model;
+    forward_kinematics(model, data, q, v);
+    let base = data.pose[0];
+    let base_orientation = if model.is_floating() {
+        DQuat::from_xyzw(q[3], q[4], q[5], q[6]).normalize()
+    } else {
+        DQuat::from_mat3(&base.rot)
+    };
+    let obs = &sim.run.observation;
+    let nv0 = model.base_nv();
+    let nq0 = model.base_nq();
+    let command = &sim.tau_actuator[nv0..];
+    let saturate = sim.workspace.passive.saturation;
+    let effort = command
+        .iter()
+        .zip(&model.effort_limit[nv0..])
+        .map(|(&t, &lim)| if saturate { t.clamp(-lim, lim) } else { t })
+        .collect();
+    let targets = match &sim.run.controller {
+        Controller::None => None,
+        c => c.joint_targets().map(<[f64]>::to_vec),
+    };
+    let velocity_targets = targets.as_ref().map(|t| vec![0.0; t.len()]);
+    // Newton's second law for the CoM with the forces acting at this instant.
+    let mut f_ext = DVec3::ZERO;
+    for s in &sim.contact.states {
+        f_ext += s.force_n;
+    }
+    let t = sim.contact.time_s;
+    for p in &sim.contact.pushes {
+        if t >= p.start_s && t < p.end_s {
+            f_ext += p.force_n;
+        }
+    }
+    let com_acc = model.gravity + f_ext / model.total_mass;
+    let feet = (0..sim.run.n_feet.min(sim.contact.states.len()))
+        .map(|i| {
+            let s = &sim.contact.states[i];
+            FootLog {
+                in_contact: s.in_contact,
+                slipping: s.slipping,
+                penetration_m: s.penetration_m,
+                normal_force_n: s.normal_force_n,
+                force_n: s.force_n,
+                position_m: obs.feet.get(i).map_or(DVec3::NAN, |f| f.position_m),
+            }
+        })
+        .collect();
+    RobotSample {
+        robot: index,
+        q: q.to_vec(),
+        v: v.to_vec(),
+        base_position_m: base.trans,
+        base_orientation,
+        base_linear_mps: data.vel[0].lin,
+        base_angular_radps: data.vel[0].ang,
+        rpy_rad: rpy_from_rot(base.rot),
+        com_m: obs.com_m,
+        com_velocity_mps: obs.com_velocity_mps,
+        com_acceleration_mps2: com_acc,
+        joint_position: q[nq0..].to_vec(),
+        joint_velocity: v[nv0..].to_vec(),
+        joint_effort: effort,
+        joint_effort_command: command.to_vec(),
+        joint_position_desired: targets,
+        joint_velocity_desired: velocity_targets,
+        feet,
+        link_poses: (0..model.frames.len())
+            .map(|f| frame_pose(model, data, f))
+            .collect(),
+    }
+}
