@@ -54,8 +54,31 @@ fn main() {
             lateral_mps: 0.0,
             yaw_rate_radps: 0.0,
         },
-        qp: ForceQpParams::default(),
-        placement: PlacementParams::default(),
+        qp: {
+            let mut p = ForceQpParams::default();
+            let env = |k: &str, d: f64| {
+                std::env::var(k)
+                    .ok()
+                    .and_then(|x| x.parse().ok())
+                    .unwrap_or(d)
+            };
+            let (wh, wm) = (env("WH", 1.0), env("WM", 10.0));
+            p.wrench_weight = [wh, wh, 1.0, wm, wm, env("WY", 10.0)];
+            p.min_normal_force_n = env("FMIN", p.min_normal_force_n);
+            p
+        },
+        placement: {
+            let env = |k: &str, d: f64| {
+                std::env::var(k)
+                    .ok()
+                    .and_then(|x| x.parse().ok())
+                    .unwrap_or(d)
+            };
+            let mut p = PlacementParams::default();
+            p.gain_s = env("KG", p.gain_s);
+            p.max_step_x_m = env("MSX", p.max_step_x_m);
+            p
+        },
         lift_height_m: args.get(3).copied().unwrap_or(0.17),
         reach: ReachDown::default(),
         swing_kp_nm_per_rad: kp,
@@ -63,6 +86,15 @@ fn main() {
         ankle_hold: (20.0, 0.3),
         ik: IkOptions::default(),
         swing_feedforward: std::env::var("NOFF").is_err(),
+        command_accel_mps2: std::env::var("CA")
+            .ok()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(1.0),
+        max_horizontal_force_ratio: std::env::var("HR")
+            .ok()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0.0),
+        stance_needs_contact: std::env::var("SNC").is_ok(),
         velocity_filter_s: std::env::var("VF")
             .ok()
             .and_then(|x| x.parse().ok())
@@ -81,7 +113,28 @@ fn main() {
     let mut tau = vec![0.0; model.nv];
     let dt = 0.0005;
     let mut tj = vec![0.0; model.nv - 6];
+    let quiet = std::env::var("QUIET").is_ok();
+    let (mut max_tilt, mut x3, mut zmin, mut zmax) = (0.0_f64, 0.0, f64::INFINITY, 0.0_f64);
+    let mut fell = None;
     for k in 0..(10.0 / dt) as usize {
+        let rpy =
+            quadsim_engine::spatial::rpy_from_rot(quadsim_engine::spatial::Transform::IDENTITY.rot);
+        let _ = rpy;
+        {
+            let qq = glam::DQuat::from_xyzw(st.q[3], st.q[4], st.q[5], st.q[6]);
+            let (r, p, _) = {
+                let e = quadsim_engine::spatial::rpy_from_rot(glam::DMat3::from_quat(qq));
+                (e.x, e.y, e.z)
+            };
+            max_tilt = max_tilt.max(r.abs()).max(p.abs());
+            if k == 6000 {
+                x3 = st.q[0];
+            }
+            if k >= 6000 {
+                zmin = zmin.min(st.q[2]);
+                zmax = zmax.max(st.q[2]);
+            }
+        }
         forward_kinematics(&model, &mut data, &st.q, &st.v);
         update_after_step(&points, &data, &terrain, &mut states);
         let every: usize = std::env::var("EVERY")
@@ -121,7 +174,50 @@ fn main() {
             Integrator::SemiImplicitEuler,
             &mut f,
         );
-        if std::env::var("FINE").is_ok() && (1000..1400).contains(&k) && k % 20 == 0 {
+        if std::env::var("TD").is_ok() && k % 4 == 0 {
+            let sc = walker.scheduler();
+            for i in 0..4 {
+                let l = sc.leg(i);
+                if l.phase == quadsim_engine::gait::scheduler::LegPhase::Swing
+                    && l.swing_progress > 0.97
+                {
+                    println!(
+                        "  t={:.3} leg{} x_base={:.3} vx={:.2} prog={:.2} td_target=({:.3},{:.3}) liftoff=({:.3},{:.3})",
+                        k as f64 * dt,
+                        i,
+                        st.q[0],
+                        st.v[0],
+                        l.swing_progress,
+                        l.touchdown_pos_m.x,
+                        l.touchdown_pos_m.y,
+                        l.liftoff_pos_m.x,
+                        l.liftoff_pos_m.y
+                    );
+                }
+            }
+        }
+        if std::env::var("LEGS").is_ok() && (1700..1950).contains(&k) && k % 8 == 0 {
+            let sc = walker.scheduler();
+            let l0 = sc.leg(0);
+            let l1 = sc.leg(1);
+            println!(
+                "  t={:.3} vx={:.2} pitch={:.3} L0 {:?} c={} prog={:.2} L1 {:?} c={} fz={:.0?} contact={:.0?}",
+                k as f64 * dt,
+                st.v[0],
+                2.0 * st.q[4],
+                l0.phase,
+                states[0].in_contact,
+                l0.swing_progress,
+                l1.phase,
+                states[1].in_contact,
+                walker.foot_forces().iter().map(|f| f.z).collect::<Vec<_>>(),
+                states
+                    .iter()
+                    .map(|s| s.in_contact as u8)
+                    .collect::<Vec<_>>(),
+            );
+        }
+        if std::env::var("FINE").is_ok() && (680..760).contains(&k) && k % 4 == 0 {
             let qd = walker.joint_targets();
             println!(
                 "  t={:.3} LF q={:.3?} qdes={:.3?} tau={:.1?} roll={:.3} f={:.0?}",
@@ -133,11 +229,12 @@ fn main() {
                 walker.foot_forces().iter().map(|f| f.z).collect::<Vec<_>>()
             );
         }
-        if k % std::env::var("PR")
-            .ok()
-            .and_then(|x| x.parse().ok())
-            .unwrap_or(500)
-            == 0
+        if !quiet
+            && k % std::env::var("PR")
+                .ok()
+                .and_then(|x| x.parse().ok())
+                .unwrap_or(500)
+                == 0
         {
             let w = walker.wrench();
             println!(
@@ -161,9 +258,19 @@ fn main() {
                 &tj[0..4]
             );
         }
-        if !st.q[2].is_finite() || st.q[2] < 0.2 {
-            println!("fell at {k}");
+        if !st.q[2].is_finite() || st.q[2] < 0.29 {
+            if !quiet {
+                println!("fell at {k}");
+            }
+            fell = Some(k as f64 * dt);
             break;
         }
     }
+    println!(
+        "SUMMARY fell={:?} mean_v={:.3} max_tilt={:.3} z_p2p={:.4}",
+        fell,
+        (st.q[0] - x3) / 7.0,
+        max_tilt,
+        zmax - zmin
+    );
 }

@@ -76,6 +76,18 @@ pub struct WalkerParams {
     /// body's speed swing by ±0.5 m/s within each step; Raibert's feedback on
     /// the raw speed then places feet on that recoil.
     pub velocity_filter_s: f64,
+    /// Largest rate of change of the commanded forward/lateral speed
+    /// (m/s²; ≤ 0: steps). A step to 1.5 m/s asks VMC's damper alone for
+    /// 450 N, more than friction gives under quad16's 275 N weight.
+    pub command_accel_mps2: f64,
+    /// Bound on the virtual wrench's horizontal force as a fraction of its
+    /// vertical force (≤ 0: none); the rest could only come out of the
+    /// moment rows of the QP (the body then pitches and rolls).
+    pub max_horizontal_force_ratio: f64,
+    /// Whether a stance leg whose foot has lost contact carries no force
+    /// (and holds its joint targets by the swing PD) until it touches again;
+    /// otherwise `τ = −Jᵀ f` would fling the free leg toward the ground.
+    pub stance_needs_contact: bool,
 }
 
 impl WalkerParams {
@@ -133,6 +145,9 @@ impl WalkerParams {
             ik: IkOptions::default(),
             swing_feedforward: true,
             velocity_filter_s: 0.0,
+            command_accel_mps2: 1.0,
+            max_horizontal_force_ratio: 0.0,
+            stance_needs_contact: false,
         }
     }
 }
@@ -216,6 +231,8 @@ pub struct Walker {
     leg_qd: Vec<f64>,
     leg_q2: Vec<f64>,
     leg_qd2: Vec<f64>,
+    /// The command the operator set; `vmc.command` ramps toward it.
+    command_set: VmcCommand,
     /// Low-passed CoM velocity (heading frame) for foot placement.
     v_filt: DVec2,
     v_filt_init: bool,
@@ -267,7 +284,18 @@ impl Walker {
             })
             .collect();
         Ok(Walker {
-            vmc: Vmc::new(params.vmc, params.command),
+            vmc: Vmc::new(
+                params.vmc,
+                if params.command_accel_mps2 > 0.0 {
+                    VmcCommand {
+                        forward_mps: 0.0,
+                        lateral_mps: 0.0,
+                        ..params.command
+                    }
+                } else {
+                    params.command
+                },
+            ),
             qp: ForceQp::new(params.qp),
             scheduler,
             legs,
@@ -283,6 +311,7 @@ impl Walker {
             leg_qd: vec![0.0; 4],
             leg_q2: vec![0.0; 4],
             leg_qd2: vec![0.0; 4],
+            command_set: params.command,
             v_filt: DVec2::ZERO,
             v_filt_init: false,
             params,
@@ -290,12 +319,23 @@ impl Walker {
     }
 
     /// Changes the velocity command (a scenario `command` event).
+    /// The speeds ramp toward it at `command_accel_mps2`; the yaw rate
+    /// applies at once.
     pub fn set_command(&mut self, command: VmcCommand) {
-        self.vmc.command = command;
+        self.command_set = command;
+        self.vmc.command.yaw_rate_radps = command.yaw_rate_radps;
+        if self.params.command_accel_mps2 <= 0.0 {
+            self.vmc.command = command;
+        }
     }
 
-    /// The current velocity command.
+    /// The current velocity command (as set; see [`Self::active_command`]).
     pub fn command(&self) -> VmcCommand {
+        self.command_set
+    }
+
+    /// The command in effect this tick (the ramped speeds).
+    pub fn active_command(&self) -> VmcCommand {
         self.vmc.command
     }
 
@@ -351,6 +391,14 @@ impl Walker {
         let com_vel = com_velocity(model, data);
         let yaw = rpy_from_rot(rot).z;
         let heading = DMat3::from_rotation_z(yaw);
+
+        // 0. command ramp
+        if self.params.command_accel_mps2 > 0.0 {
+            let dv = self.params.command_accel_mps2 * input.dt_s;
+            let c = &mut self.vmc.command;
+            c.forward_mps += (self.command_set.forward_mps - c.forward_mps).clamp(-dv, dv);
+            c.lateral_mps += (self.command_set.lateral_mps - c.lateral_mps).clamp(-dv, dv);
+        }
 
         // 1. gait, with the feet's world positions for lift-off/touchdown points
         for (i, li) in self.leg_info.iter().enumerate() {
@@ -483,7 +531,7 @@ impl Walker {
         // 5. virtual wrench (the swing legs' reaction is not added: feeding
         //    the base rows of τ_id to the QP made quad16 fall even in place —
         //    the moment about the support diagonal is not realizable)
-        let w = self.vmc.update(&VmcInput {
+        let mut w = self.vmc.update(&VmcInput {
             base_position_m: p_base,
             base_rotation: rot,
             base_linear_velocity_mps: v_base,
@@ -493,6 +541,16 @@ impl Walker {
             height_above_ground_m: p_base.z - ground_z,
             dt_s: input.dt_s,
         });
+        let r = self.params.max_horizontal_force_ratio;
+        if r > 0.0 {
+            let h = w.lin.truncate();
+            let hmax = r * w.lin.z.max(0.0);
+            if h.length() > hmax {
+                let h = h * (hmax / h.length());
+                w.lin.x = h.x;
+                w.lin.y = h.y;
+            }
+        }
         self.wrench = w;
 
         // 6. force distribution over loaded stance feet
@@ -504,7 +562,10 @@ impl Walker {
         }; MAX_FEET];
         for i in 0..nl {
             let leg = self.scheduler.leg(i);
-            let load = if leg.phase == LegPhase::Stance {
+            let touching = input.contacts.get(i).copied().unwrap_or(true);
+            let load = if leg.phase == LegPhase::Stance
+                && (touching || !self.params.stance_needs_contact)
+            {
                 leg.load
             } else {
                 0.0
@@ -542,7 +603,10 @@ impl Walker {
         for i in 0..nl {
             let leg = &self.legs[i];
             let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
-            if self.scheduler.leg(i).phase == LegPhase::Swing {
+            let touching = input.contacts.get(i).copied().unwrap_or(true);
+            let free = self.scheduler.leg(i).phase == LegPhase::Swing
+                || (self.params.stance_needs_contact && !touching);
+            if free {
                 for k in 0..dof {
                     let j = vi[k] - nv0;
                     let e = self.q_des[j] - q[qi[k]];
