@@ -29,6 +29,7 @@ use glam::{DQuat, DVec3};
 use quadsim_components::{
     ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, describe_robot,
 };
+use quadsim_engine::contact::{ContactEval, contact_forces};
 use quadsim_engine::description::RobotDescription;
 use quadsim_engine::kinematics::{forward_kinematics, frame_pose};
 use quadsim_engine::spatial::{Transform, rpy_from_rot};
@@ -90,7 +91,8 @@ pub struct FootLog {
     pub normal_force_n: f64,
     /// Ground reaction force on the foot (N, world).
     pub force_n: DVec3,
-    /// Contact point: the sphere's lowest point along the ground normal (m, world).
+    /// Where the ground force acts: the sphere's deepest point in contact,
+    /// else its lowest point (m, world).
     pub position_m: DVec3,
 }
 
@@ -167,6 +169,8 @@ struct Followed {
     model: Option<Arc<Model>>,
     /// Kinematics scratch for the snapshot (the robot's own `data` is the step's).
     data: Option<Data>,
+    /// Contact evaluations at the snapshot (one per contact point).
+    evals: Vec<ContactEval>,
     /// `(q, v)` at the start of the current step.
     q: Vec<f64>,
     v: Vec<f64>,
@@ -217,6 +221,7 @@ pub fn start_logging(
                 logged,
                 model: None,
                 data: None,
+                evals: Vec::new(),
                 q: Vec::new(),
                 v: Vec::new(),
             })
@@ -343,7 +348,7 @@ fn sample_all(world: &World, logger: &mut Logger, j: u64) {
             continue;
         }
         let data = r.data.as_mut().expect("snapshot made data");
-        samples.push(sample_robot(i, sim, &r.q, &r.v, data));
+        samples.push(sample_robot(i, sim, &r.q, &r.v, data, &mut r.evals));
     }
     logger.last_sampled = Some(j);
     logger.sink.send(LogRecord::Step {
@@ -354,15 +359,34 @@ fn sample_all(world: &World, logger: &mut Logger, j: u64) {
 
 /// One robot's sample from the snapshot `(q, v)` at `t_j` and what the
 /// simulation computed at `t_j` (observation, contact states, command).
+///
+/// The contact forces are evaluated with the engine's contact model at the
+/// snapshot and the contact states the step used: the very forces of the
+/// step's first derivative evaluation (the only one for semi-implicit Euler,
+/// RK4's first stage), not the states' own `force_n`, which the `Contact`
+/// stage computed before moving the anchors of slipping feet.
 fn sample_robot(
     index: usize,
     sim: &RobotSim,
     q: &[f64],
     v: &[f64],
     data: &mut Data,
+    evals: &mut Vec<ContactEval>,
 ) -> RobotSample {
     let model = &sim.model;
     forward_kinematics(model, data, q, v);
+    let contact = &sim.contact;
+    evals.clear();
+    evals.resize(contact.points.len(), ContactEval::default());
+    data.clear_external_forces();
+    contact_forces(
+        &contact.points,
+        model,
+        data,
+        &contact.terrain,
+        &contact.states,
+        Some(evals),
+    );
     let base = data.pose[0];
     let base_orientation = if model.is_floating() {
         DQuat::from_xyzw(q[3], q[4], q[5], q[6]).normalize()
@@ -386,8 +410,8 @@ fn sample_robot(
     let velocity_targets = targets.as_ref().map(|t| vec![0.0; t.len()]);
     // Newton's second law for the CoM with the forces acting at this instant.
     let mut f_ext = DVec3::ZERO;
-    for s in &sim.contact.states {
-        f_ext += s.force_n;
+    for e in evals.iter().filter(|e| e.active) {
+        f_ext += e.force_n();
     }
     let t = sim.contact.time_s;
     for p in &sim.contact.pushes {
@@ -396,16 +420,21 @@ fn sample_robot(
         }
     }
     let com_acc = model.gravity + f_ext / model.total_mass;
-    let feet = (0..sim.run.n_feet.min(sim.contact.states.len()))
+    let feet = (0..sim.run.n_feet.min(evals.len()))
         .map(|i| {
-            let s = &sim.contact.states[i];
+            let e = &evals[i];
+            let p = &contact.points[i];
             FootLog {
-                in_contact: s.in_contact,
-                slipping: s.slipping,
-                penetration_m: s.penetration_m,
-                normal_force_n: s.normal_force_n,
-                force_n: s.force_n,
-                position_m: obs.feet.get(i).map_or(DVec3::NAN, |f| f.position_m),
+                in_contact: e.active,
+                slipping: e.active && e.slipping,
+                penetration_m: if e.active { e.depth_m } else { 0.0 },
+                normal_force_n: if e.active { e.normal_force_n } else { 0.0 },
+                force_n: if e.active { e.force_n() } else { DVec3::ZERO },
+                position_m: if e.active {
+                    e.application_m
+                } else {
+                    data.body_point_world(p.body, p.point_in_body) - DVec3::Z * p.radius_m
+                },
             }
         })
         .collect();

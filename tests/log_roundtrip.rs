@@ -1,0 +1,420 @@
+//! `log.mcap` read back with the `mcap` crate: channels, schemas, message
+//! counts (⌊steps / decimation⌋ + 1, t = 0 included), decoded values against
+//! the simulation's state, Newton's law for the logged CoM acceleration,
+//! byte-identical files across runs, `quadsim report` and `quadsim export`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use quadsim::log::read::{LogContents, read_log};
+use quadsim::log::schema::Schema;
+use quadsim::log::{RunOutcome, start_run_log};
+use quadsim::scenario::parse_scenario;
+use quadsim::world::{Overrides, build_world};
+use serde_json::Value;
+
+const PER_STEP: [&str; 8] = [
+    "base_pose",
+    "base_twist",
+    "attitude",
+    "com",
+    "joint_states",
+    "joint_commands",
+    "feet",
+    "virtual_wrench",
+];
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("quadsim-log-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Two quad16s on concrete under joint PD; `quiet` is not logged per step.
+fn scenario(duration_s: f64, extra_world: &str) -> String {
+    format!(
+        r#"format_version = 1
+[world]
+name = "logtest"
+dt_s = 0.0005
+duration_s = {duration_s}
+controller_rate_hz = 500
+seed = 3
+default_ground = "concrete"
+{extra_world}
+
+[[robots]]
+name = "rex"
+model = "quad16"
+start_position_m = [0.0, 0.0, 0.62]
+[robots.controller]
+kind = "joint_pd"
+bandwidth_hz = 3.0
+
+[[robots]]
+name = "quiet"
+model = "quad12"
+start_position_m = [3.0, 0.0, 0.5]
+log = false
+"#
+    )
+}
+
+/// Checks `v` against a JSON Schema's `type`, `properties` (every key of an
+/// object must be declared) and `items`, recursively. Returns the path of the
+/// first mismatch.
+fn conforms(v: &Value, schema: &Value, path: &str) -> Result<(), String> {
+    let types: Vec<&str> = match &schema["type"] {
+        Value::String(s) => vec![s.as_str()],
+        Value::Array(a) => a.iter().filter_map(Value::as_str).collect(),
+        _ => vec![],
+    };
+    let kind = match v {
+        Value::Null => "null",
+        Value::Bool(_) => "boolean",
+        Value::Number(n) if n.is_u64() || n.is_i64() => "integer",
+        Value::Number(_) => "number",
+        Value::String(_) => "string",
+        Value::Array(_) => "array",
+        Value::Object(_) => "object",
+    };
+    let ok = types.is_empty()
+        || types.contains(&kind)
+        || (kind == "integer" && types.contains(&"number"));
+    if !ok {
+        return Err(format!("{path}: {kind} where the schema says {types:?}"));
+    }
+    match v {
+        Value::Object(map) => {
+            if let Some(props) = schema["properties"].as_object() {
+                for (k, x) in map {
+                    let sub = props
+                        .get(k)
+                        .ok_or_else(|| format!("{path}.{k}: not in the schema"))?;
+                    conforms(x, sub, &format!("{path}.{k}"))?;
+                }
+            }
+        }
+        Value::Array(a) => {
+            if schema.get("items").is_some() {
+                for (i, x) in a.iter().enumerate() {
+                    conforms(x, &schema["items"], &format!("{path}[{i}]"))?;
+                }
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+fn last(c: &LogContents, topic: &str) -> Value {
+    c.topic(topic).last().unwrap().json().unwrap()
+}
+
+fn v3(v: &Value) -> [f64; 3] {
+    [
+        v["x"].as_f64().unwrap(),
+        v["y"].as_f64().unwrap(),
+        v["z"].as_f64().unwrap(),
+    ]
+}
+
+#[test]
+fn channels_counts_schemas_and_values_match_the_simulation() {
+    let dir = tmp("roundtrip");
+    // 403 steps at a decimation of 4: ⌊403/4⌋ + 1 = 101 samples, the last at step 400
+    let src = scenario(0.2015, "");
+    let scn = parse_scenario(&dir.join("logtest.toml"), src.clone()).unwrap();
+    let mut world = build_world(&scn, Overrides::default()).unwrap();
+    let rex = world.robots[0].1;
+    let q0 = world.sim.robot(rex).unwrap().state.q.clone();
+    let path = dir.join("log.mcap");
+    let log = start_run_log(&scn, &mut world, &path, 4).unwrap();
+    assert_eq!(world.steps, 403);
+    world.sim.run(400);
+    let q400 = world.sim.robot(rex).unwrap().state.q.clone();
+    world.sim.run(3);
+    log.finish(&mut world, &RunOutcome::default()).unwrap();
+    let c = read_log(&path).unwrap();
+    assert_eq!(c.error, None);
+
+    // per-step channels of the logged robot only, with their schemas
+    for s in PER_STEP {
+        let topic = format!("/rex/{s}");
+        let msgs: Vec<_> = c.topic(&topic).collect();
+        assert_eq!(msgs.len(), 403 / 4 + 1, "{topic}");
+        for (k, m) in msgs.iter().enumerate() {
+            assert_eq!(m.log_time_ns, k as u64 * 4 * 500_000, "{topic} #{k}");
+        }
+        assert_eq!(c.topic(&format!("/quiet/{s}")).count(), 0);
+    }
+    assert_eq!(c.topic("/tf").count(), 403 / 4 + 1);
+    assert_eq!(c.topic("/scene").count(), 1);
+    assert_eq!(c.topic("/terrain").count(), 1);
+    assert_eq!(c.topic("/rex/metrics").count(), 1);
+    assert_eq!(c.topic("/quiet/metrics").count(), 1);
+    // every message conforms to its schema, and the schema stored is ours
+    for schema in Schema::ALL {
+        let stored: Value = serde_json::from_str(&c.schemas[schema.name()]).unwrap();
+        assert_eq!(stored, schema.json(), "{}", schema.name());
+    }
+    for m in &c.messages {
+        let schema: Value = serde_json::from_str(&c.schemas[&m.schema]).unwrap();
+        conforms(&m.json().unwrap(), &schema, &m.topic).unwrap();
+    }
+
+    // the first sample is the start state, the last the final state, exactly
+    let sim = world.sim.robot(rex).unwrap();
+    for (k, qk) in [(0usize, &q0), (100, &q400)] {
+        let m = c.topic("/rex/base_pose").nth(k).unwrap().json().unwrap();
+        let p = v3(&m["pose"]["position"]);
+        assert_eq!(p, [qk[0], qk[1], qk[2]], "base position at sample {k}");
+        let o = &m["pose"]["orientation"];
+        for (i, key) in ["x", "y", "z", "w"].iter().enumerate() {
+            assert!((o[key].as_f64().unwrap() - qk[3 + i]).abs() < 1e-15);
+        }
+    }
+    // step 403 is not a multiple of 4: no sample of the final state
+    assert_eq!(world.sim.clock().step, 403);
+    let js = last(&c, "/rex/joint_states");
+    let names: Vec<&str> = js["name"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    assert_eq!(names.len(), sim.model.nv - 6);
+    assert_eq!(names[2], sim.model.joint_name[sim.model.v_body[8]]);
+    let cmd = last(&c, "/rex/joint_commands");
+    let targets = sim.run.controller.joint_targets().unwrap();
+    let logged: Vec<f64> = cmd["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(logged, targets);
+    // feet carry the robot: the normal forces of a standing robot add up to its weight (±30 %, it still settles)
+    let feet = last(&c, "/rex/feet");
+    let fz: f64 = feet["feet"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["force"]["z"].as_f64().unwrap())
+        .sum();
+    let weight = sim.model.total_mass * 9.81;
+    assert!(
+        (fz - weight).abs() < 0.3 * weight,
+        "Σfz {fz} vs weight {weight}"
+    );
+    assert!(feet["feet"][0]["gait_phase"].is_null());
+    assert!(last(&c, "/rex/virtual_wrench")["force"].is_null());
+    // /tf holds every link of the logged robot only
+    let tf = last(&c, "/tf");
+    assert_eq!(
+        tf["transforms"].as_array().unwrap().len(),
+        sim.model.frames.len()
+    );
+
+    // metadata
+    assert_eq!(c.meta("scenario", "text"), Some(src.as_str()));
+    assert_eq!(c.meta("quadsim", "seed"), Some("3"));
+    assert_eq!(c.meta("quadsim", "log_every_steps"), Some("4"));
+    assert_eq!(c.meta("run", "steps"), Some("403"));
+    assert_eq!(c.meta("run", "interrupted"), Some("false"));
+    let metrics = last(&c, "/rex/metrics");
+    let expected = quadsim::cli::run::metrics_json("rex", &sim.run.metrics.summary());
+    assert_eq!(metrics, expected);
+}
+
+#[test]
+fn logged_com_acceleration_obeys_newton_and_integrates_to_the_logged_velocity() {
+    // A quad16 dropped 3 cm onto concrete, logged every step: the CoM
+    // acceleration is g + Σf/m with the contact forces of that instant, so its
+    // integral over the landing must equal the change of the logged CoM velocity.
+    let dir = tmp("newton");
+    let src = scenario(0.25, "").replace("[0.0, 0.0, 0.62]", "[0.0, 0.0, 0.65]");
+    let scn = parse_scenario(&dir.join("drop.toml"), src).unwrap();
+    let mut world = build_world(&scn, Overrides::default()).unwrap();
+    let path = dir.join("log.mcap");
+    let log = start_run_log(&scn, &mut world, &path, 1).unwrap();
+    world.sim.run(world.steps);
+    log.finish(&mut world, &RunOutcome::default()).unwrap();
+    let c = read_log(&path).unwrap();
+    let com: Vec<Value> = c.topic("/rex/com").map(|m| m.json().unwrap()).collect();
+    assert_eq!(com.len(), 501);
+    // the last sample is the final state (500 steps, a multiple of the rate)
+    let q = &world.sim.robot(world.robots[0].1).unwrap().state.q;
+    let pose = last(&c, "/rex/base_pose");
+    assert_eq!(v3(&pose["pose"]["position"]), [q[0], q[1], q[2]]);
+    let js = last(&c, "/rex/joint_states");
+    let joints: Vec<f64> = js["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(joints, q[7..]);
+    let dt = 0.0005;
+    let (mut integral, mut peak) = ([0.0; 3], 0.0f64);
+    for m in &com[..500] {
+        let a = v3(&m["acceleration"]);
+        for i in 0..3 {
+            integral[i] += a[i] * dt;
+        }
+        peak = peak.max(a[2]);
+    }
+    let dv: Vec<f64> = (0..3)
+        .map(|i| v3(&com[500]["velocity"])[i] - v3(&com[0]["velocity"])[i])
+        .collect();
+    // free fall first (a = g exactly), then a landing that stops the fall
+    assert_eq!(v3(&com[0]["acceleration"]), [0.0, 0.0, -9.81]);
+    assert!(peak > 9.81, "landing decelerates: peak a_z {peak}");
+    let scale = 9.81 * 0.25;
+    for i in 0..3 {
+        assert!(
+            (integral[i] - dv[i]).abs() < 0.02 * scale,
+            "axis {i}: ∫a dt = {} vs Δv = {}",
+            integral[i],
+            dv[i]
+        );
+    }
+}
+
+fn quadsim() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_quadsim"))
+}
+
+fn run_cli(scn: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let o = quadsim()
+        .arg("run")
+        .arg(scn)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+#[test]
+fn two_runs_write_byte_identical_logs() {
+    let dir = tmp("determinism");
+    let scn = dir.join("logtest.toml");
+    std::fs::write(&scn, scenario(0.3, "log_rate_hz = 250")).unwrap();
+    run_cli(&scn, &dir.join("a"), &["--threads", "1"]);
+    run_cli(&scn, &dir.join("b"), &["--threads", "2"]);
+    let a = std::fs::read(dir.join("a/log.mcap")).unwrap();
+    let b = std::fs::read(dir.join("b/log.mcap")).unwrap();
+    assert!(a.len() > 10_000);
+    assert!(a == b, "logs differ ({} vs {} bytes)", a.len(), b.len());
+    // log_rate_hz = 250 at 2 kHz steps: every 8th step, 600 steps
+    let c = read_log(&dir.join("a/log.mcap")).unwrap();
+    assert_eq!(c.topic("/rex/com").count(), 600 / 8 + 1);
+    // --log-rate overrides it; --no-log writes none
+    run_cli(&scn, &dir.join("c"), &["--log-rate", "full"]);
+    let c = read_log(&dir.join("c/log.mcap")).unwrap();
+    assert_eq!(c.topic("/rex/com").count(), 601);
+    run_cli(&scn, &dir.join("d"), &["--no-log"]);
+    assert!(!dir.join("d/log.mcap").exists());
+    assert!(dir.join("d/summary.json").exists());
+}
+
+#[test]
+fn bad_log_rates_are_rejected_naming_the_key() {
+    let dir = tmp("badrate");
+    let scn = dir.join("bad.toml");
+    std::fs::write(&scn, scenario(0.1, "log_rate_hz = 300")).unwrap();
+    let o = quadsim().arg("check").arg(&scn).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("world.log_rate_hz") && err.contains("300"),
+        "{err}"
+    );
+    std::fs::write(&scn, scenario(0.1, "")).unwrap();
+    let o = quadsim()
+        .args([
+            "run",
+            scn.to_str().unwrap(),
+            "--quiet",
+            "--log-rate",
+            "often",
+            "--out",
+        ])
+        .arg(dir.join("o"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--log-rate") && err.contains("often"), "{err}");
+}
+
+fn without_timing(mut v: Value) -> Value {
+    v.as_object_mut().unwrap().remove("timing");
+    v
+}
+
+#[test]
+fn report_rebuilds_the_summary_and_export_writes_tidy_csv() {
+    let dir = tmp("report");
+    let scn = dir.join("logtest.toml");
+    std::fs::write(&scn, scenario(0.25, "")).unwrap();
+    let out = dir.join("run");
+    run_cli(&scn, &out, &[]);
+    let o = quadsim()
+        .arg("report")
+        .arg(out.join("log.mcap"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read =
+        |p: &Path| -> Value { serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap() };
+    let original = read(&out.join("summary.json"));
+    let rebuilt = read(&out.join("report/summary.json"));
+    assert_eq!(rebuilt, without_timing(original.clone()));
+    assert_eq!(rebuilt["robots"].as_array().unwrap().len(), 2);
+
+    let csv_dir = dir.join("csv");
+    let o = quadsim()
+        .arg("export")
+        .arg(out.join("log.mcap"))
+        .arg("--csv")
+        .arg(&csv_dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = read_log(&out.join("log.mcap")).unwrap();
+    let text = std::fs::read_to_string(csv_dir.join("rex.joint_states.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header[0], "t_s");
+    let knee = header
+        .iter()
+        .position(|h| *h == "position.LF_knee")
+        .expect("joint columns are named by joint");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), c.topic("/rex/joint_states").count());
+    let js = last(&c, "/rex/joint_states");
+    let i = js["name"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n == "LF_knee")
+        .unwrap();
+    let last_row = rows.last().unwrap();
+    assert_eq!(
+        last_row[knee].parse::<f64>().unwrap(),
+        js["position"][i].as_f64().unwrap()
+    );
+    assert_eq!(last_row[0].parse::<f64>().unwrap(), 0.25);
+    // feet by name, booleans as 1/0
+    let feet = std::fs::read_to_string(csv_dir.join("rex.feet.csv")).unwrap();
+    let h = feet.lines().next().unwrap();
+    assert!(h.contains("feet.LF_foot.force.z") && h.contains("feet.LF_foot.in_contact"));
+    assert!(csv_dir.join("tf.csv").exists());
+    assert!(!csv_dir.join("scene.csv").exists());
+}
