@@ -14,7 +14,10 @@ use quadsim_components::{
 };
 use quadsim_engine::contact::{ContactKind, ContactPoint, ContactState};
 use quadsim_engine::control::joint_pd::{JointPd, bandwidth_gains, static_stance_torques};
+use quadsim_engine::control::vmc::VmcCommand;
+use quadsim_engine::control::walker::{Walker, WalkerParams};
 use quadsim_engine::description::{RobotDescription, Shape};
+use quadsim_engine::gait::{Gait, GaitKind};
 use quadsim_engine::integrate::{Integrator, State};
 use quadsim_engine::metrics::MetricsAccumulator;
 use quadsim_engine::model::BaseKind;
@@ -181,19 +184,50 @@ pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError
 
         let points = contact_points(&model, &desc, &r.contact_points);
         let n_feet = model.feet.len();
-        let controller = controller(&loc, &p, r, &model, &q, &points[..n_feet])?;
+        let mut model_desc = desc.clone();
+        model_desc.name = r.model.clone();
+        let controller = controller(&loc, &p, r, &model_desc, &model, &q, &points[..n_feet])?;
         let root = sim
             .spawn_robot(&desc)
             .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
         let mut pushes = Vec::new();
+        let mut commands = Vec::new();
         for (k, e) in f
             .events
             .iter()
             .enumerate()
             .filter(|(_, e)| e.robot == r.name)
         {
-            pushes.push(push_event(&loc, &format!("events[{k}]"), e, &model)?);
+            let ep = format!("events[{k}]");
+            match e.kind.as_str() {
+                "push" => pushes.push(push_event(&loc, &ep, e, &model)?),
+                "command" => {
+                    let Controller::Walker(w) = &controller else {
+                        return Err(loc.at(
+                            &format!("{ep}.kind"),
+                            "a command event needs a robot with controller kind \"vmc\"",
+                        ));
+                    };
+                    let num = |key: &str, d: f64| {
+                        e.params
+                            .get(key)
+                            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+                            .unwrap_or(d)
+                    };
+                    let prev = w.command();
+                    commands.push((
+                        e.t_s,
+                        VmcCommand {
+                            forward_mps: num("v_x_mps", prev.forward_mps),
+                            lateral_mps: num("v_y_mps", prev.lateral_mps),
+                            yaw_rate_radps: num("yaw_rate_radps", prev.yaw_rate_radps),
+                        },
+                    ));
+                }
+                _ => {}
+            }
         }
+        commands.sort_by(|a, b| a.0.total_cmp(&b.0));
         let sim_r = sim.robot_mut(root).expect("compiled");
         sim_r.state = State {
             q,
@@ -203,6 +237,7 @@ pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError
         sim_r.contact.points = points;
         sim_r.contact.pushes = pushes;
         sim_r.run.controller = controller;
+        sim_r.run.commands = commands;
         sim_r.run.n_feet = n_feet;
         sim_r.run.fall = FallCriteria {
             min_base_height_m: 0.5 * stance_height,
@@ -306,6 +341,7 @@ fn controller(
     loc: &Locator<'_>,
     p: &str,
     r: &crate::scenario::format::RobotSpec,
+    desc: &RobotDescription,
     model: &Model,
     q: &[f64],
     feet: &[ContactPoint],
@@ -367,6 +403,58 @@ fn controller(
                 target_rad: q[7..].to_vec(),
                 feedforward_nm: ff,
             }))
+        }
+        "vmc" => {
+            let mut wp = WalkerParams::default_for(desc, model);
+            let has = |k: &str| c.params.contains_key(k);
+            let kp = format!("{p}.controller");
+            if let Some(name) = c.params.get("gait").and_then(|v| v.as_str()) {
+                let kind = GaitKind::from_name(name).ok_or_else(|| {
+                    loc.at(
+                        &format!("{kp}.gait"),
+                        format!("unknown gait '{name}' (trot, walk, pace, bound, pronk, stand)"),
+                    )
+                })?;
+                let period = get("period_s", kind.default_period_s());
+                let duty = get("duty_factor", kind.default_duty());
+                wp.gait =
+                    Gait::of_kind(kind, period, duty).map_err(|e| loc.at(&kp, e.to_string()))?;
+            }
+            if has("four_leg_support_s") || has("two_leg_support_s") {
+                wp.gait = Gait::trot_from_supports(
+                    get("period_s", wp.gait.period_s()),
+                    get("four_leg_support_s", 0.1),
+                    get("two_leg_support_s", 0.15),
+                )
+                .map_err(|e| loc.at(&kp, e.to_string()))?;
+            } else if has("period_s") && !has("gait") {
+                wp.gait = Gait::of_kind(
+                    wp.gait.kind(),
+                    get("period_s", 0.5),
+                    get("duty_factor", wp.gait.duty_factor()),
+                )
+                .map_err(|e| loc.at(&kp, e.to_string()))?;
+            }
+            wp.lift_height_m = get("lift_height_m", wp.lift_height_m);
+            wp.command = VmcCommand {
+                forward_mps: get("v_x_mps", wp.command.forward_mps),
+                lateral_mps: get("v_y_mps", wp.command.lateral_mps),
+                yaw_rate_radps: get("yaw_rate_radps", wp.command.yaw_rate_radps),
+            };
+            wp.vmc.base_height_m = get("height_m", wp.vmc.base_height_m);
+            wp.vmc.payload_mass_kg = get("payload_mass_kg", 0.0);
+            wp.vmc.max_position_error_m = get("position_clip_m", wp.vmc.max_position_error_m);
+            wp.placement.gain_s = get("placement_gain_s", wp.placement.gain_s);
+            if has("swing_bandwidth_hz") {
+                let mut data = Data::new(model);
+                let (kps, kds) =
+                    bandwidth_gains(model, &mut data, q, get("swing_bandwidth_hz", 4.0), 1.0);
+                wp.swing_kp_nm_per_rad = kps;
+                wp.swing_kd_nms_per_rad = kds;
+            }
+            let w = Walker::new(desc, model, wp)
+                .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
+            Ok(Controller::Walker(Box::new(w)))
         }
         other => Err(loc.at(
             &format!("{p}.controller.kind"),

@@ -4,18 +4,22 @@
 
 use glam::DVec3;
 use quadsim_engine::control::joint_pd::JointPd;
+use quadsim_engine::control::vmc::VmcCommand;
+use quadsim_engine::control::walker::Walker;
 use quadsim_engine::metrics::{FootSample, MetricsAccumulator};
 use quadsim_engine::spatial::Transform;
 
 /// How a robot's actuators are commanded (written by the `Control` stage at
 /// the controller rate and held between controller ticks).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub enum Controller {
     /// No actuation: the joints are limp.
     #[default]
     None,
     /// Joint-space PD toward fixed targets.
     JointPd(JointPd),
+    /// Study A's walking controller: gait, VMC, force QP, swing legs.
+    Walker(Box<Walker>),
 }
 
 impl Controller {
@@ -24,6 +28,7 @@ impl Controller {
         match self {
             Controller::None => None,
             Controller::JointPd(pd) => Some(&pd.target_rad),
+            Controller::Walker(w) => Some(w.joint_targets()),
         }
     }
 }
@@ -87,6 +92,9 @@ pub struct RobotRun {
     pub metrics: MetricsAccumulator,
     /// Scratch: saturated actuator torques of the joints (N·m).
     pub tau_joints: Vec<f64>,
+    /// Velocity commands for the walking controller, `(t_s, command)`,
+    /// sorted by time; applied at the first controller tick at or after `t_s`.
+    pub commands: Vec<(f64, VmcCommand)>,
 }
 
 impl Default for RobotRun {
@@ -98,6 +106,7 @@ impl Default for RobotRun {
             observation: Observation::default(),
             metrics: MetricsAccumulator::new(0.0, 0.0),
             tau_joints: Vec::new(),
+            commands: Vec::new(),
         }
     }
 }

@@ -106,18 +106,47 @@ pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
             ("gravity_compensation", Domain::Text, false),
         ],
     ),
+    (
+        "vmc",
+        &[
+            ("gait", Domain::Text, false),
+            ("period_s", Domain::Positive, false),
+            ("duty_factor", Domain::Positive, false),
+            ("four_leg_support_s", Domain::NonNegative, false),
+            ("two_leg_support_s", Domain::Positive, false),
+            ("lift_height_m", Domain::NonNegative, false),
+            ("v_x_mps", Domain::Finite, false),
+            ("v_y_mps", Domain::Finite, false),
+            ("yaw_rate_radps", Domain::Finite, false),
+            ("height_m", Domain::Positive, false),
+            ("payload_mass_kg", Domain::NonNegative, false),
+            ("swing_bandwidth_hz", Domain::Positive, false),
+            ("placement_gain_s", Domain::NonNegative, false),
+            ("position_clip_m", Domain::Positive, false),
+        ],
+    ),
 ];
 
 /// Keys of each event kind beside `t_s`, `robot`, `kind`.
-pub const EVENT_KINDS: &[(&str, &[KeySpec])] = &[(
-    "push",
-    &[
-        ("force_n", Domain::Vec3, true),
-        ("duration_s", Domain::Positive, true),
-        ("body", Domain::Text, false),
-        ("point_m", Domain::Vec3, false),
-    ],
-)];
+pub const EVENT_KINDS: &[(&str, &[KeySpec])] = &[
+    (
+        "push",
+        &[
+            ("force_n", Domain::Vec3, true),
+            ("duration_s", Domain::Positive, true),
+            ("body", Domain::Text, false),
+            ("point_m", Domain::Vec3, false),
+        ],
+    ),
+    (
+        "command",
+        &[
+            ("v_x_mps", Domain::Finite, false),
+            ("v_y_mps", Domain::Finite, false),
+            ("yaw_rate_radps", Domain::Finite, false),
+        ],
+    ),
+];
 
 /// The ground presets of Study A.
 pub const GROUND_PRESETS: &[&str] = &["concrete", "grass", "mud", "sand"];

@@ -2,7 +2,11 @@
 //! the controller rate ([`ControlRate`]); the command is held in between.
 
 use bevy_ecs::prelude::*;
-use quadsim_components::{ControlRate, Controller, RobotBatch, RobotSim, SimClock, SimThreadPool};
+use quadsim_components::{
+    ControlRate, Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
+};
+use quadsim_engine::control::walker::WalkerInput;
+use quadsim_engine::kinematics::forward_kinematics;
 
 /// Runs every robot's controller on controller ticks.
 pub fn run_controllers(
@@ -10,20 +14,80 @@ pub fn run_controllers(
     pool: Res<SimThreadPool>,
     clock: Res<SimClock>,
     rate: Res<ControlRate>,
+    config: Res<SimConfig>,
 ) {
     if !clock.step.is_multiple_of(rate.every_steps.max(1)) {
         return;
     }
     let sims = &mut batch.sims;
-    pool.for_each(sims, control_robot);
+    let dt = clock_dt(&rate, &config);
+    let t = clock.time_s;
+    pool.for_each(sims, |sim| control_robot_at(sim, t, dt));
 }
 
-/// One robot's control law, from its current `(q, v)`.
+fn clock_dt(rate: &ControlRate, config: &SimConfig) -> f64 {
+    rate.every_steps.max(1) as f64 * config.dt_s
+}
+
+/// One robot's control law at time `t_s`, ticking every `dt_s`.
+pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
+    if let Controller::Walker(w) = &mut sim.run.controller {
+        while let Some(&(tc, cmd)) = sim.run.commands.first() {
+            if tc > t_s + 1e-12 {
+                break;
+            }
+            w.set_command(cmd);
+            sim.run.commands.remove(0);
+        }
+        let RobotSim {
+            model,
+            data,
+            state,
+            tau_actuator,
+            contact,
+            run,
+            ..
+        } = sim;
+        let Controller::Walker(w) = &mut run.controller else {
+            unreachable!()
+        };
+        forward_kinematics(model, data, &state.q, &state.v);
+        let n = run.n_feet.min(4);
+        let mut contacts = [false; 4];
+        let mut normals = [glam::DVec3::Z; 4];
+        for i in 0..n {
+            contacts[i] = contact.states[i].in_contact;
+            if contact.states[i].in_contact {
+                normals[i] = contact.states[i].normal;
+            }
+        }
+        let nb = model.base_nv();
+        tau_actuator[..nb].fill(0.0);
+        let input = WalkerInput {
+            dt_s,
+            terrain: &contact.terrain,
+            contacts: &contacts[..n],
+            normals: &normals[..n],
+        };
+        w.tick(
+            model,
+            data,
+            &state.q,
+            &state.v,
+            &input,
+            &mut tau_actuator[nb..],
+        );
+        return;
+    }
+    control_robot(sim);
+}
+
+/// One robot's joint-space control law, from its current `(q, v)`.
 pub fn control_robot(sim: &mut RobotSim) {
     let nb = sim.model.base_nv();
     let (nq0, nv0) = (sim.model.base_nq(), nb);
     match &sim.run.controller {
-        Controller::None => sim.tau_actuator.fill(0.0),
+        Controller::None | Controller::Walker(_) => sim.tau_actuator.fill(0.0),
         Controller::JointPd(pd) => {
             sim.tau_actuator[..nb].fill(0.0);
             pd.compute(

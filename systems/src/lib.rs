@@ -24,7 +24,7 @@ pub use compile::{
     CompileSchedule, DirtyRobots, build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
 };
 pub use contact::{height_above_ground, observe_robot, update_contacts};
-pub use control::{control_robot, run_controllers};
+pub use control::{control_robot, control_robot_at, run_controllers};
 pub use ground::compile_ground;
 pub use log::{
     FootLog, LogRecord, LogSink, Logger, RobotInfo, RobotSample, finish_logging, log_step,

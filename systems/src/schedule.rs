@@ -139,10 +139,14 @@ pub fn register_publish(schedule: &mut Schedule) {
             .after(record_metrics),
     );
     // Logging (only while a `Logger` exists): samples the state the step started from.
+    // It only reads the simulation (and writes its own sink), so its order
+    // against systems users add to `Publish` does not matter: declared
+    // ambiguous with them, so that such hooks do not fail the schedule build.
     schedule.add_systems(
         log_step
             .run_if(resource_exists::<Logger>)
             .in_set(SimSystems::Publish)
-            .after(sync_link_poses),
+            .after(sync_link_poses)
+            .ambiguous_with_all(),
     );
 }
