@@ -24,10 +24,11 @@ fn main() {
         .collect();
     let vx = args.first().copied().unwrap_or(1.5);
     let bw = args.get(1).copied().unwrap_or(8.0);
-    let desc = robots::builtin("quad16").unwrap();
+    let robot = std::env::var("ROBOT").unwrap_or_else(|_| "quad16".into());
+    let desc = robots::builtin(&robot).unwrap();
     let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
     let mut data = Data::new(&model);
-    let mut q = robots::nominal_q("quad16").unwrap();
+    let mut q = robots::nominal_q(&robot).unwrap();
     let (kp, kd) = bandwidth_gains(&model, &mut data, &q, bw, 1.0);
     let params = WalkerParams {
         gait: if args.get(2).copied().unwrap_or(1.0) == 0.0 {
@@ -95,10 +96,24 @@ fn main() {
             .and_then(|x| x.parse().ok())
             .unwrap_or(0.0),
         stance_needs_contact: std::env::var("SNC").is_ok(),
+        swing_in_level_frame: std::env::var("NOLVL").is_err(),
         velocity_filter_s: std::env::var("VF")
             .ok()
             .and_then(|x| x.parse().ok())
             .unwrap_or(0.0),
+    };
+    let params = if std::env::var("DEF").is_ok() {
+        let mut d = WalkerParams::default_for(&desc, &model);
+        d.command.forward_mps = vx;
+        if args.get(2) == Some(&0.0) {
+            d.gait = Gait::stand();
+        }
+        if let Some(l) = args.get(3) {
+            d.lift_height_m = *l;
+        }
+        d
+    } else {
+        params
     };
     let mut walker = Walker::new(&desc, &model, params).unwrap();
     let terrain = TerrainUnion::flat(0.0, GroundMaterial::preset("concrete").unwrap());
@@ -116,6 +131,8 @@ fn main() {
     let quiet = std::env::var("QUIET").is_ok();
     let (mut max_tilt, mut x3, mut zmin, mut zmax) = (0.0_f64, 0.0, f64::INFINITY, 0.0_f64);
     let mut fell = None;
+    let z_start = st.q[2];
+    let mut peak_swing_tau = 0.0_f64;
     for k in 0..(10.0 / dt) as usize {
         let rpy =
             quadsim_engine::spatial::rpy_from_rot(quadsim_engine::spatial::Transform::IDENTITY.rot);
@@ -158,6 +175,16 @@ fn main() {
                 &mut tj,
             );
             tau[6..].copy_from_slice(&tj);
+            for leg in 0..4 {
+                if walker.scheduler().leg(leg).phase
+                    == quadsim_engine::gait::scheduler::LegPhase::Swing
+                {
+                    let d = tj.len() / 4;
+                    for j in leg * d..(leg + 1) * d {
+                        peak_swing_tau = peak_swing_tau.max(tj[j].abs());
+                    }
+                }
+            }
         }
         let mut f = ContactForces {
             terrain: &terrain,
@@ -258,7 +285,7 @@ fn main() {
                 &tj[0..4]
             );
         }
-        if !st.q[2].is_finite() || st.q[2] < 0.29 {
+        if !st.q[2].is_finite() || st.q[2] < 0.5 * z_start {
             if !quiet {
                 println!("fell at {k}");
             }
@@ -267,10 +294,11 @@ fn main() {
         }
     }
     println!(
-        "SUMMARY fell={:?} mean_v={:.3} max_tilt={:.3} z_p2p={:.4}",
+        "SUMMARY fell={:?} mean_v={:.3} max_tilt={:.3} z_p2p={:.4} peak_swing_tau={:.1}",
         fell,
         (st.q[0] - x3) / 7.0,
         max_tilt,
-        zmax - zmin
+        zmax - zmin,
+        peak_swing_tau
     );
 }

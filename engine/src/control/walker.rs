@@ -88,6 +88,12 @@ pub struct WalkerParams {
     /// (and holds its joint targets by the swing PD) until it touches again;
     /// otherwise `τ = −Jᵀ f` would fling the free leg toward the ground.
     pub stance_needs_contact: bool,
+    /// Whether the swing reference goes to IK from the *planned* base (level,
+    /// at the target height, measured yaw) instead of the measured base pose:
+    /// the swing legs' joint targets then do not follow the body's roll,
+    /// pitch and bounce, which through quad16's heavy legs fed back into
+    /// the body.
+    pub swing_in_level_frame: bool,
 }
 
 impl WalkerParams {
@@ -96,7 +102,7 @@ impl WalkerParams {
     /// same gains scaled by their mass ratio to quad16 (28 kg) and a height
     /// target at 0.85 of their nominal stance height (quad16: 0.5 / 0.585).
     /// Swing gains: joint bandwidth gains ([`bandwidth_gains`]) at the
-    /// nominal stance, 4 Hz, critically damped.
+    /// nominal stance, 6 Hz, critically damped.
     pub fn default_for(desc: &RobotDescription, model: &Model) -> WalkerParams {
         let nj = model.nv - model.base_nv();
         let stance = crate::robots::nominal_stance(&desc.name)
@@ -107,7 +113,7 @@ impl WalkerParams {
         q.extend_from_slice(&stance);
         q.resize(model.nq, 0.0);
         let mut data = Data::new(model);
-        let (kp, kd) = bandwidth_gains(model, &mut data, &q, 4.0, 1.0);
+        let (kp, kd) = bandwidth_gains(model, &mut data, &q, 6.0, 1.0);
         let g = model.gravity.length();
         let mut vmc = VmcParams::for_model(model);
         let is_quad16 = desc.name == "quad16";
@@ -148,6 +154,7 @@ impl WalkerParams {
             command_accel_mps2: 1.0,
             max_horizontal_force_ratio: 0.0,
             stance_needs_contact: false,
+            swing_in_level_frame: true,
         }
     }
 }
@@ -469,13 +476,23 @@ impl Walker {
             let swing = state.phase == LegPhase::Swing;
             let (target_body, vel_body, acc_body) = if swing {
                 let r = state.swing_reference(self.params.lift_height_m, &self.params.reach);
-                let rel = r.pos_m - p_base;
-                let v_rel = r.vel_m_s - v_base - w_base.cross(rel);
-                (
-                    rot.transpose() * rel,
-                    rot.transpose() * v_rel,
-                    rot.transpose() * r.acc_m_s2,
-                )
+                if self.params.swing_in_level_frame {
+                    let rel = r.pos_m - planned_base.trans;
+                    let v_rel = r.vel_m_s - DVec3::new(v_base.x, v_base.y, 0.0);
+                    (
+                        heading.transpose() * rel,
+                        heading.transpose() * v_rel,
+                        heading.transpose() * r.acc_m_s2,
+                    )
+                } else {
+                    let rel = r.pos_m - p_base;
+                    let v_rel = r.vel_m_s - v_base - w_base.cross(rel);
+                    (
+                        rot.transpose() * rel,
+                        rot.transpose() * v_rel,
+                        rot.transpose() * r.acc_m_s2,
+                    )
+                }
             } else {
                 (
                     planned_base.inverse().transform_point(self.feet_world[i]),
