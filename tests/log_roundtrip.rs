@@ -96,11 +96,9 @@ fn conforms(v: &Value, schema: &Value, path: &str) -> Result<(), String> {
                 }
             }
         }
-        Value::Array(a) => {
-            if schema.get("items").is_some() {
-                for (i, x) in a.iter().enumerate() {
-                    conforms(x, &schema["items"], &format!("{path}[{i}]"))?;
-                }
+        Value::Array(a) if schema.get("items").is_some() => {
+            for (i, x) in a.iter().enumerate() {
+                conforms(x, &schema["items"], &format!("{path}[{i}]"))?;
             }
         }
         _ => {}
