@@ -26,7 +26,15 @@ fn main() {
     let bw = args.get(1).copied().unwrap_or(8.0);
     let robot = std::env::var("ROBOT").unwrap_or_else(|_| "quad16".into());
     let desc = robots::builtin(&robot).unwrap();
-    let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+    let mut model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+    if let Some(l) = std::env::var("ELIM")
+        .ok()
+        .and_then(|x| x.parse::<f64>().ok())
+    {
+        for e in model.effort_limit[6..].iter_mut() {
+            *e = l;
+        }
+    }
     let mut data = Data::new(&model);
     let mut q = robots::nominal_q(&robot).unwrap();
     let (kp, kd) = bandwidth_gains(&model, &mut data, &q, bw, 1.0);

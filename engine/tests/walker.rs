@@ -99,11 +99,26 @@ fn run(name: &str, forward_mps: f64, duration_s: f64) -> Run {
 
 /// quad16 trots in place (Study A's timing: period 0.5 s, supports 0.1 /
 /// 0.15 s) for 10 s: the base stays above 80 % of its 0.5 m target, level
-/// within 0.2 rad, and within 0.2 m of where it started.
+/// within 0.1 rad, and within 0.1 m of where it started.
 #[test]
 fn quad16_trots_in_place_for_10_s() {
     let r = run("quad16", 0.0, 10.0);
     assert!(r.min_height_m > 0.4, "base fell to {} m", r.min_height_m);
-    assert!(r.max_tilt_rad < 0.2, "tilt reached {} rad", r.max_tilt_rad);
-    assert!(r.drift_m < 0.2, "drifted {} m", r.drift_m);
+    assert!(r.max_tilt_rad < 0.1, "tilt reached {} rad", r.max_tilt_rad);
+    assert!(r.drift_m < 0.1, "drifted {} m", r.drift_m);
+}
+
+/// quad16 trots at 0.5 m/s commanded for 10 s: upright (tilt < 0.15 rad),
+/// above 80 % of its height target, and the mean speed over [3, 10] s within
+/// 0.05 m/s of the command.
+#[test]
+fn quad16_trots_at_half_a_metre_per_second() {
+    let r = run("quad16", 0.5, 10.0);
+    assert!(r.min_height_m > 0.4, "base fell to {} m", r.min_height_m);
+    assert!(r.max_tilt_rad < 0.15, "tilt reached {} rad", r.max_tilt_rad);
+    assert!(
+        (r.mean_speed_mps - 0.5).abs() < 0.05,
+        "mean speed {} m/s",
+        r.mean_speed_mps
+    );
 }
