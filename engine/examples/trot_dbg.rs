@@ -105,6 +105,10 @@ fn main() {
             .unwrap_or(0.0),
         stance_needs_contact: std::env::var("SNC").is_ok(),
         swing_in_level_frame: std::env::var("NOLVL").is_err(),
+        knee_guard_rad: std::env::var("KGU")
+            .ok()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0.5),
         velocity_filter_s: std::env::var("VF")
             .ok()
             .and_then(|x| x.parse().ok())
@@ -190,6 +194,20 @@ fn main() {
                     let d = tj.len() / 4;
                     for j in leg * d..(leg + 1) * d {
                         peak_swing_tau = peak_swing_tau.max(tj[j].abs());
+                        if std::env::var("SAT").is_ok() && tj[j].abs() > 95.0 {
+                            let l = walker.scheduler().leg(leg);
+                            println!(
+                                "  SAT t={:.3} leg{} joint{} tau={:.0} prog={:.2} late={:.3} q={:.2} qdes={:.2}",
+                                k as f64 * dt,
+                                leg,
+                                j - leg * d,
+                                tj[j],
+                                l.swing_progress,
+                                l.late_s,
+                                st.q[7 + j],
+                                walker.joint_targets()[j]
+                            );
+                        }
                     }
                 }
             }

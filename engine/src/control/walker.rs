@@ -94,6 +94,9 @@ pub struct WalkerParams {
     /// pitch and bounce, which through quad16's heavy legs fed back into
     /// the body.
     pub swing_in_level_frame: bool,
+    /// Smallest knee bend (rad) a stance leg is held to, on the IK branch
+    /// (≤ 0: no guard). See `Walker::guard_knee`.
+    pub knee_guard_rad: f64,
 }
 
 impl WalkerParams {
@@ -155,6 +158,7 @@ impl WalkerParams {
             max_horizontal_force_ratio: 0.0,
             stance_needs_contact: false,
             swing_in_level_frame: true,
+            knee_guard_rad: 0.5,
         }
     }
 }
@@ -364,6 +368,29 @@ impl Walker {
     /// The gait scheduler.
     pub fn scheduler(&self) -> &GaitScheduler {
         &self.scheduler
+    }
+
+    /// Keeps a stance leg's knee (joint 2 of the leg) on the IK branch, at
+    /// least `knee_guard_rad` from straight: a stance leg is force-controlled
+    /// and, stretched behind the hip at speed, can snap through the straight
+    /// knee into the other branch; the next swing then starts with its
+    /// targets on the far side (observed at 0.75 m/s: every joint saturated).
+    /// A one-sided PD (the swing gains of that joint) toward the margin.
+    fn guard_knee(&self, leg: usize, nv0: usize, q: &[f64], v: &[f64], tau_joints: &mut [f64]) {
+        let LegInfo { qi, vi, dof, .. } = self.leg_info[leg];
+        let margin = self.params.knee_guard_rad;
+        if dof < 3 || margin <= 0.0 {
+            return;
+        }
+        let j = vi[2] - nv0;
+        let branch = self.q_des[j].signum();
+        let qk = q[qi[2]];
+        let depth = margin - branch * qk;
+        if depth > 0.0 {
+            let kp = self.params.swing_kp_nm_per_rad[j];
+            let kd = self.params.swing_kd_nms_per_rad[j];
+            tau_joints[j] += branch * (kp * depth) - kd * v[vi[2]];
+        }
     }
 
     /// One control tick at `(q, v)`; writes the joint torques (N·m, joints
@@ -630,7 +657,10 @@ impl Walker {
                     tau_joints[j] = self.params.swing_kp_nm_per_rad[j] * e
                         + self.params.swing_kd_nms_per_rad[j] * (self.qd_des[j] - v[vi[k]]);
                 }
-            } else if dof == 4 {
+            } else {
+                self.guard_knee(i, nv0, q, v, tau_joints);
+            }
+            if !free && dof == 4 {
                 // quad16's ankle: keep the foot level with the body
                 let (kp, kd) = self.params.ankle_hold;
                 let j = vi[3] - nv0;
