@@ -56,6 +56,7 @@ fn main() {
             p.gains.stiffness_nm_per_rad *= env("KR", 1.0);
             p.gains.damping_nms_per_rad *= env("KRD", 1.0);
             p.gains.damping_nspm *= env("KD", 1.0);
+            p.base_height_m = env("HT", p.base_height_m);
             p
         },
         command: VmcCommand {
@@ -123,6 +124,9 @@ fn main() {
         if let Some(l) = args.get(3) {
             d.lift_height_m = *l;
         }
+        if let Some(h) = std::env::var("HT").ok().and_then(|x| x.parse().ok()) {
+            d.vmc.base_height_m = h;
+        }
         d
     } else {
         params
@@ -145,6 +149,7 @@ fn main() {
     let mut fell = None;
     let z_start = st.q[2];
     let mut peak_swing_tau = 0.0_f64;
+    let mut swing_taus: Vec<f64> = Vec::new();
     for k in 0..(10.0 / dt) as usize {
         let rpy =
             quadsim_engine::spatial::rpy_from_rot(quadsim_engine::spatial::Transform::IDENTITY.rot);
@@ -194,6 +199,7 @@ fn main() {
                     let d = tj.len() / 4;
                     for j in leg * d..(leg + 1) * d {
                         peak_swing_tau = peak_swing_tau.max(tj[j].abs());
+                        swing_taus.push(tj[j].abs());
                         if std::env::var("SAT").is_ok() && tj[j].abs() > 95.0 {
                             let l = walker.scheduler().leg(leg);
                             println!(
@@ -319,6 +325,14 @@ fn main() {
             break;
         }
     }
+    swing_taus.sort_by(|a, b| a.total_cmp(b));
+    let p99 = swing_taus
+        .get((swing_taus.len() as f64 * 0.99) as usize)
+        .copied()
+        .unwrap_or(0.0);
+    let sat =
+        swing_taus.iter().filter(|t| **t > 99.0).count() as f64 / swing_taus.len().max(1) as f64;
+    println!("SWING_TAU p99={p99:.1} saturated_fraction={sat:.4}");
     println!(
         "SUMMARY fell={:?} mean_v={:.3} max_tilt={:.3} z_p2p={:.4} peak_swing_tau={:.1}",
         fell,

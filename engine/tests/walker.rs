@@ -122,3 +122,42 @@ fn quad16_trots_at_half_a_metre_per_second() {
         r.mean_speed_mps
     );
 }
+
+/// quad16 trots at 0.75 m/s commanded for 10 s: upright (tilt < 0.3 rad),
+/// above 80 % of its height target, mean speed over [3, 10] s within 0.05
+/// m/s of the command.
+#[test]
+fn quad16_trots_at_three_quarters_of_a_metre_per_second() {
+    let r = run("quad16", 0.75, 10.0);
+    assert!(r.min_height_m > 0.4, "base fell to {} m", r.min_height_m);
+    assert!(r.max_tilt_rad < 0.3, "tilt reached {} rad", r.max_tilt_rad);
+    assert!(
+        (r.mean_speed_mps - 0.75).abs() < 0.05,
+        "mean speed {} m/s",
+        r.mean_speed_mps
+    );
+}
+
+/// Study A's target, not reached yet: quad16 falls within about 2–4 s at a
+/// 1.5 m/s command (see `WalkerParams::default_for`).
+#[test]
+#[ignore = "not reached: quad16 falls within ~2-4 s at 1.5 m/s"]
+fn quad16_trots_at_study_a_speed() {
+    let r = run("quad16", 1.5, 10.0);
+    let nominal = robots::nominal_base_height_m("quad16").unwrap();
+    assert!(
+        r.min_height_m > 0.5 * nominal,
+        "base fell to {} m",
+        r.min_height_m
+    );
+    assert!(
+        r.max_tilt_rad < 60f64.to_radians(),
+        "tilt {} rad",
+        r.max_tilt_rad
+    );
+    assert!(
+        r.mean_speed_mps >= 1.0,
+        "mean speed {} m/s",
+        r.mean_speed_mps
+    );
+}

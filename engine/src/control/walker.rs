@@ -13,11 +13,24 @@
 //!    plus gravity compensation ([`super::vmc`]).
 //! 4. **Force distribution**: `W` over the loaded stance feet
 //!    ([`super::force_qp`], friction pyramids about the terrain normal).
-//! 5. **Stance torques** `τ = −Jᵀ f` (f = the ground's force on the foot);
-//!    quad16's ankle, redundant for a point foot, holds the foot level by PD.
+//! 5. **Stance torques** `τ = τ_id − Jᵀ f` (f = the ground's force on the
+//!    foot); quad16's ankle, redundant for a point foot, holds the foot level
+//!    by PD; a one-sided PD keeps the knee bent on its IK branch.
 //! 6. **Swing**: the foot follows a min-jerk swing in the world; its
-//!    reference, expressed in the base frame, goes through closed-form leg IK
-//!    to joint targets tracked by joint PD.
+//!    reference, expressed in the *planned* base frame (level, at the target
+//!    height), goes through closed-form leg IK to joint targets tracked by
+//!    joint PD about an inverse-dynamics feed-forward `τ_id` (RNEA with the
+//!    reference's joint accelerations, base held still).
+//!
+//! quad16's legs are 18 of its 28 kg, and three feedback paths through them
+//! made it fall (each measured with `examples/trot_dbg.rs`): swing PD without
+//! feed-forward (diverged at ≥ 8 Hz even in place); swing targets in the
+//! *measured* base frame (body roll/pitch moved the heavy swing legs, whose
+//! reaction rolled the body further: in-place tilt 0.26 → 0.06 rad with the
+//! planned frame); stance knees snapping through straight at speed. Feeding
+//! the swing legs' reaction wrench (base rows of `τ_id`) to the QP made it
+//! worse: during diagonal support the moment about the support line is not
+//! realizable within friction.
 //!
 //! In flight (no stance foot) the stance torques are zero and only the swing
 //! legs are driven. Sign conventions: see [`super::force_qp`] (torques) and
@@ -105,7 +118,20 @@ impl WalkerParams {
     /// same gains scaled by their mass ratio to quad16 (28 kg) and a height
     /// target at 0.85 of their nominal stance height (quad16: 0.5 / 0.585).
     /// Swing gains: joint bandwidth gains ([`bandwidth_gains`]) at the
-    /// nominal stance, 6 Hz, critically damped.
+    /// nominal stance, 6 Hz, critically damped. Study A's timing (period
+    /// 0.5 s, supports 0.1 / 0.15 s) but a 5 cm lift, not 17 cm.
+    ///
+    /// What these defaults reach (quad16, flat concrete, semi-implicit Euler
+    /// at 0.5 ms, controller at 500 Hz, 10 s; `engine/tests/walker.rs`):
+    /// in place: tilt ≤ 0.06 rad, height p2p 9 mm; 0.5 m/s: mean 0.50 m/s,
+    /// tilt 0.06 rad, p2p 20 mm; 0.75 m/s: mean 0.75 m/s, tilt 0.17 rad,
+    /// p2p 38 mm; 1.0 m/s: survives (mean 0.96 m/s, tilt 0.39 rad) but not
+    /// robustly (falls with ±0.01 m height target). At 1.25 and 1.5 m/s it
+    /// falls within 2–5 s. Lifts of 8–14 cm hold in place and at 0.5 m/s;
+    /// 17 cm falls (swing torques at the 100 N·m limit).
+    ///
+    /// quad12 stands under these defaults but does not trot: it sinks in the
+    /// first diagonal support with its joints at the 3 N·m effort limit.
     pub fn default_for(desc: &RobotDescription, model: &Model) -> WalkerParams {
         let nj = model.nv - model.base_nv();
         let stance = crate::robots::nominal_stance(&desc.name)
