@@ -208,12 +208,45 @@ fn channels_counts_schemas_and_values_match_the_simulation() {
     );
     assert!(feet["feet"][0]["gait_phase"].is_null());
     assert!(last(&c, "/rex/virtual_wrench")["force"].is_null());
-    // /tf holds every link of the logged robot only
+    // /tf holds every link of the logged robot only, as a tree whose chains
+    // compose to the links' world poses (single precision)
     let tf = last(&c, "/tf");
-    assert_eq!(
-        tf["transforms"].as_array().unwrap().len(),
-        sim.model.frames.len()
-    );
+    let tfs = tf["transforms"].as_array().unwrap();
+    assert_eq!(tfs.len(), sim.model.frames.len());
+    let mut data = quadsim_engine::Data::new(&sim.model);
+    quadsim_engine::kinematics::forward_kinematics_pos(&sim.model, &mut data, &q400);
+    let find = |child: &str| tfs.iter().find(|t| t["child_frame_id"] == child).unwrap();
+    for (f, frame) in sim.model.frames.iter().enumerate() {
+        let (mut p, mut r) = (glam::DVec3::ZERO, glam::DQuat::IDENTITY);
+        let mut at = format!("rex/{}", frame.name);
+        let mut depth = 0;
+        while at != "world" {
+            let t = find(&at);
+            let o = &t["rotation"];
+            let q = glam::DQuat::from_xyzw(
+                o["x"].as_f64().unwrap(),
+                o["y"].as_f64().unwrap(),
+                o["z"].as_f64().unwrap(),
+                o["w"].as_f64().unwrap(),
+            );
+            let tr = glam::DVec3::from_array(v3(&t["translation"]));
+            // parent_from_frame = parent_from_child ∘ child_from_frame
+            p = tr + q * p;
+            r = q * r;
+            at = t["parent_frame_id"].as_str().unwrap().to_string();
+            depth += 1;
+            assert!(depth < 20, "cycle in /tf");
+        }
+        let want = quadsim_engine::kinematics::frame_pose(&sim.model, &data, f);
+        assert!(
+            (p - want.trans).length() < 1e-5,
+            "{}: {p} vs {}",
+            frame.name,
+            want.trans
+        );
+        let err = (glam::DMat3::from_quat(r) - want.rot).abs().to_cols_array();
+        assert!(err.iter().all(|e| *e < 1e-5), "{}", frame.name);
+    }
 
     // metadata
     assert_eq!(c.meta("scenario", "text"), Some(src.as_str()));

@@ -224,11 +224,11 @@ pub fn run(a: RunArgs) -> Result<(), CliError> {
         println!("wrote {}", out.out_dir.join("summary.json").display());
         if let Some(l) = &out.log {
             println!(
-                "wrote {} ({} messages, {:.1} MB; log writer thread busy {:.3} s)",
+                "wrote {} ({} messages, {:.1} MB; log writer thread: {:.3} s CPU)",
                 out.out_dir.join(crate::log::LOG_FILE).display(),
                 l.messages,
                 l.file_bytes as f64 / 1e6,
-                l.busy_s
+                l.cpu_s.unwrap_or(l.busy_s)
             );
         }
     }

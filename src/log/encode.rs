@@ -189,6 +189,8 @@ pub struct RobotNames {
     feet: Vec<String>,
     /// `"<robot>/<link>"` of every model frame as a JSON string.
     frames: Vec<String>,
+    /// The parent frame of every model frame as a JSON string (`"world"` for the base).
+    parents: Vec<String>,
 }
 
 impl RobotNames {
@@ -203,6 +205,13 @@ impl RobotNames {
                 .frames
                 .iter()
                 .map(|f| quoted(&frame_id(&info.name, &f.name)))
+                .collect(),
+            parents: quadsim_systems::frame_parents(&info.model)
+                .iter()
+                .map(|p| match p {
+                    Some(i) => quoted(&frame_id(&info.name, &info.model.frames[*i].name)),
+                    None => quoted(WORLD),
+                })
                 .collect(),
         }
     }
@@ -378,9 +387,10 @@ pub fn encode_robot(
     j.raw("}");
 }
 
-/// Encodes the `/tf` message: every link frame of every sampled robot,
-/// parent `world`. Single precision (about 1e-7 relative: display only; the
-/// robot channels carry full precision).
+/// Encodes the `/tf` message: every link frame of every sampled robot in its
+/// parent link's frame (the base link in `world`), a tree like ROS's
+/// `robot_state_publisher` publishes. Single precision (about 1e-7 relative:
+/// display only; the robot channels carry full precision).
 pub fn encode_transforms(samples: &[(&RobotNames, &RobotSample)], t_ns: u64, out: &mut Vec<u8>) {
     out.clear();
     let mut j = Json(out);
@@ -388,23 +398,30 @@ pub fn encode_transforms(samples: &[(&RobotNames, &RobotSample)], t_ns: u64, out
     j.raw("{\"transforms\":[");
     let mut first = true;
     for (names, s) in samples {
-        for (pose, child) in s.link_poses.iter().zip(&names.frames) {
+        for ((pose, child), parent) in s
+            .link_transforms
+            .iter()
+            .zip(&names.frames)
+            .zip(&names.parents)
+        {
             if !first {
                 j.raw(",");
             }
             first = false;
             j.raw("{\"timestamp\":");
             j.time(time);
-            j.raw(",\"parent_frame_id\":\"world\",\"child_frame_id\":");
+            j.raw(",\"parent_frame_id\":");
+            j.raw(parent);
+            j.raw(",\"child_frame_id\":");
             j.raw(child);
-            let t = pose.trans.as_vec3();
+            let t = pose.0.as_vec3();
             j.raw(",\"translation\":{\"x\":");
             j.num32(t.x);
             j.raw(",\"y\":");
             j.num32(t.y);
             j.raw(",\"z\":");
             j.num32(t.z);
-            let q = DQuat::from_mat3(&pose.rot).normalize().as_quat();
+            let q = pose.1.as_quat();
             j.raw("},\"rotation\":{\"x\":");
             j.num32(q.x);
             j.raw(",\"y\":");

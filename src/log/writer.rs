@@ -68,9 +68,19 @@ pub struct WriterStats {
     pub messages: u64,
     /// Bytes of the finished file.
     pub file_bytes: u64,
-    /// Time the writer thread spent encoding and writing (s), i.e. the share
-    /// of a core it used; waiting for records is not counted.
+    /// Wall time the writer thread spent encoding and writing (s); waiting
+    /// for records is not counted, time the OS gave to other threads is.
     pub busy_s: f64,
+    /// CPU time of the writer thread (s), where the OS reports it (Linux's
+    /// `/proc/thread-self/schedstat`): the share of a core logging takes.
+    pub cpu_s: Option<f64>,
+}
+
+/// CPU time of the calling thread (s), on Linux.
+fn thread_cpu_s() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
 }
 
 enum Cmd {
@@ -304,6 +314,7 @@ fn write_loop(
                 stats.file_bytes = file.metadata().map(|m| m.len()).unwrap_or(0);
                 busy += start.elapsed();
                 stats.busy_s = busy.as_secs_f64();
+                stats.cpu_s = thread_cpu_s();
                 return Ok(stats);
             }
         }
@@ -312,5 +323,6 @@ fn write_loop(
     // every sender dropped without `Finish`: still close the file properly
     w.finish().map_err(|e| e.to_string())?;
     stats.busy_s = busy.as_secs_f64();
+    stats.cpu_s = thread_cpu_s();
     Ok(stats)
 }

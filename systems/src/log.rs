@@ -32,6 +32,7 @@ use quadsim_components::{
 use quadsim_engine::contact::{ContactEval, contact_forces};
 use quadsim_engine::description::RobotDescription;
 use quadsim_engine::kinematics::{forward_kinematics, frame_pose};
+use quadsim_engine::model::JointType;
 use quadsim_engine::spatial::{Transform, rpy_from_rot};
 use quadsim_engine::{Data, Model};
 
@@ -137,8 +138,88 @@ pub struct RobotSample {
     pub joint_velocity_desired: Option<Vec<f64>>,
     /// Feet in the model's foot order.
     pub feet: Vec<FootLog>,
-    /// World pose of every link frame (one per `model.frames` entry).
-    pub link_poses: Vec<Transform>,
+    /// Every link frame (one per `model.frames` entry) in its parent frame
+    /// ([`frame_parents`]; the world for the base link): translation (m) and
+    /// rotation, exact from the joint angles, so fixed offsets and the zero
+    /// components of one-axis rotations are exactly constant.
+    pub link_transforms: Vec<(DVec3, DQuat)>,
+}
+
+/// The parent of every link frame of `model` for a transform tree: a body's
+/// first frame hangs from the first frame of its parent body (`None`: the
+/// base's, whose parent is the world); other frames of a body (links merged
+/// by fixed joints) hang from its first frame.
+pub fn frame_parents(model: &Model) -> Vec<Option<usize>> {
+    let primary = |b: usize| model.frames.iter().position(|f| f.body == b);
+    model
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let first = primary(f.body);
+            if first != Some(i) {
+                first
+            } else if f.body == 0 {
+                None
+            } else {
+                primary(model.parent[f.body])
+            }
+        })
+        .collect()
+}
+
+/// The transforms of [`RobotSample::link_transforms`] at joint angles `q`
+/// (world poses in `data` for the base link and for frames without a parent body frame).
+fn link_transforms(
+    model: &Model,
+    data: &Data,
+    q: &[f64],
+    base: DQuat,
+    parents: &[Option<usize>],
+) -> Vec<(DVec3, DQuat)> {
+    let quat = |t: &Transform| {
+        if t.rot == glam::DMat3::IDENTITY {
+            DQuat::IDENTITY
+        } else {
+            DQuat::from_mat3(&t.rot).normalize()
+        }
+    };
+    // a frame in its body: (translation, rotation)
+    let in_body = |f: usize| {
+        let p = &model.frames[f].placement;
+        (p.trans, quat(p))
+    };
+    let compose = |(ta, qa): (DVec3, DQuat), (tb, qb): (DVec3, DQuat)| (ta + qa * tb, qa * qb);
+    let inverse = |(t, r): (DVec3, DQuat)| (-(r.inverse() * t), r.inverse());
+    (0..model.frames.len())
+        .map(|f| {
+            let b = model.frames[f].body;
+            match parents[f] {
+                None => {
+                    let pose = frame_pose(model, data, f);
+                    if f == 0 && model.frames[f].placement == Transform::IDENTITY {
+                        (pose.trans, base)
+                    } else {
+                        (pose.trans, quat(&pose))
+                    }
+                }
+                Some(pf) if model.frames[pf].body == b => compose(inverse(in_body(pf)), in_body(f)),
+                Some(pf) => {
+                    // parent body frame → joint frame → joint motion → this frame
+                    let x = &model.placement[b];
+                    let qi = q[model.idx_q[b]];
+                    let axis = model.axis[b];
+                    let motion = match model.joint_type[b] {
+                        JointType::Revolute => (DVec3::ZERO, DQuat::from_axis_angle(axis, qi)),
+                        JointType::Prismatic => (axis * qi, DQuat::IDENTITY),
+                        JointType::Free | JointType::Anchored => (DVec3::ZERO, DQuat::IDENTITY),
+                    };
+                    let joint = compose((x.trans, quat(x)), motion);
+                    compose(inverse(in_body(pf)), compose(joint, in_body(f)))
+                }
+            }
+        })
+        .collect()
 }
 
 /// What the logger hands to its sink.
@@ -171,6 +252,8 @@ struct Followed {
     data: Option<Data>,
     /// Contact evaluations at the snapshot (one per contact point).
     evals: Vec<ContactEval>,
+    /// [`frame_parents`] of the model.
+    parents: Vec<Option<usize>>,
     /// `(q, v)` at the start of the current step.
     q: Vec<f64>,
     v: Vec<f64>,
@@ -222,6 +305,7 @@ pub fn start_logging(
                 model: None,
                 data: None,
                 evals: Vec::new(),
+                parents: Vec::new(),
                 q: Vec::new(),
                 v: Vec::new(),
             })
@@ -323,6 +407,7 @@ fn snapshot(world: &World, logger: &mut Logger) {
         };
         if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
             r.data = Some(Data::new(&sim.model));
+            r.parents = frame_parents(&sim.model);
             r.model = Some(sim.model.clone());
         }
         r.q.clear();
@@ -348,7 +433,15 @@ fn sample_all(world: &World, logger: &mut Logger, j: u64) {
             continue;
         }
         let data = r.data.as_mut().expect("snapshot made data");
-        samples.push(sample_robot(i, sim, &r.q, &r.v, data, &mut r.evals));
+        samples.push(sample_robot(
+            i,
+            sim,
+            &r.q,
+            &r.v,
+            data,
+            &mut r.evals,
+            &r.parents,
+        ));
     }
     logger.last_sampled = Some(j);
     logger.sink.send(LogRecord::Step {
@@ -372,6 +465,7 @@ fn sample_robot(
     v: &[f64],
     data: &mut Data,
     evals: &mut Vec<ContactEval>,
+    parents: &[Option<usize>],
 ) -> RobotSample {
     let model = &sim.model;
     forward_kinematics(model, data, q, v);
@@ -457,8 +551,6 @@ fn sample_robot(
         joint_position_desired: targets,
         joint_velocity_desired: velocity_targets,
         feet,
-        link_poses: (0..model.frames.len())
-            .map(|f| frame_pose(model, data, f))
-            .collect(),
+        link_transforms: link_transforms(model, data, q, base_orientation, parents),
     }
 }
