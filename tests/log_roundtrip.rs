@@ -449,3 +449,54 @@ fn report_rebuilds_the_summary_and_export_writes_tidy_csv() {
     assert!(csv_dir.join("tf.csv").exists());
     assert!(!csv_dir.join("scene.csv").exists());
 }
+
+#[test]
+fn a_recompiled_robot_is_drawn_again_and_keeps_being_logged() {
+    use bevy_ecs::prelude::*;
+    let dir = tmp("recompile");
+    let scn = parse_scenario(&dir.join("logtest.toml"), scenario(0.1, "")).unwrap();
+    let mut world = build_world(&scn, Overrides::default()).unwrap();
+    let path = dir.join("log.mcap");
+    let log = start_run_log(&scn, &mut world, &path, 4).unwrap();
+    world.sim.run(100);
+    // a heavier torso: the robot is recompiled before the next step
+    let mut links = world
+        .sim
+        .world
+        .query::<(&quadsim_components::Link, &mut quadsim_components::Mass)>();
+    for (link, mut mass) in links.iter_mut(&mut world.sim.world) {
+        if link.name == "torso" {
+            mass.0 += 1.0;
+        }
+    }
+    world.sim.run(100);
+    let mass = world.sim.robot(world.robots[0].1).unwrap().model.total_mass;
+    log.finish(&mut world, &RunOutcome::default()).unwrap();
+    let c = read_log(&path).unwrap();
+    let scenes: Vec<Value> = c.topic("/scene").map(|m| m.json().unwrap()).collect();
+    assert_eq!(scenes.len(), 2, "drawn at the start and after the change");
+    assert_eq!(c.topic("/scene").nth(1).unwrap().log_time_ns, 100 * 500_000);
+    assert!(scenes[0]["deletions"].as_array().unwrap().is_empty());
+    assert_eq!(scenes[1]["deletions"][0]["type"], 1);
+    assert_eq!(
+        scenes[1]["entities"].as_array().unwrap().len(),
+        scenes[0]["entities"].as_array().unwrap().len()
+    );
+    assert!(scenes[0]["entities"].as_array().unwrap().len() > 10);
+    assert_eq!(c.topic("/rex/com").count(), 200 / 4 + 1);
+    // the CoM acceleration after the change uses the new mass: at rest-ish
+    // on the ground, Σf_z/m + g stays near 0 only with the right mass
+    let com = last(&c, "/rex/com");
+    let feet = last(&c, "/rex/feet");
+    let fz: f64 = feet["feet"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["force"]["z"].as_f64().unwrap())
+        .sum();
+    let az = com["acceleration"]["z"].as_f64().unwrap();
+    assert!(
+        (az - (fz / mass - 9.81)).abs() < 1e-9,
+        "{az} vs {fz}/{mass} - g"
+    );
+}

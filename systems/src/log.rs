@@ -313,7 +313,8 @@ pub fn start_logging(
         sink,
         last_sampled: None,
     };
-    announce_if_changed(world, &mut logger, true);
+    let step = world.resource::<SimClock>().step;
+    announce_if_changed(world, &mut logger, true, step);
     snapshot(world, &mut logger);
     world.insert_resource(logger);
 }
@@ -349,10 +350,11 @@ pub fn log_step(world: &mut World) {
     world.resource_scope(|world, mut logger: Mut<Logger>| {
         let step = world.resource::<SimClock>().step;
         let j = step.saturating_sub(1);
+        // a model recompiled before this step: its names and shapes first
+        announce_if_changed(world, &mut logger, false, j);
         if step > 0 && j.is_multiple_of(logger.every_steps) && logger.last_sampled != Some(j) {
             sample_all(world, &mut logger, j);
         }
-        announce_if_changed(world, &mut logger, false);
         snapshot(world, &mut logger);
     });
 }
@@ -363,7 +365,7 @@ fn robot_sim(world: &World, entity: Entity) -> Option<&RobotSim> {
 }
 
 /// Sends the robot list when it is new or a model was recompiled.
-fn announce_if_changed(world: &World, logger: &mut Logger, force: bool) {
+fn announce_if_changed(world: &World, logger: &mut Logger, force: bool, step: u64) {
     let changed = logger.robots.iter().any(|r| {
         let now = robot_sim(world, r.entity).map(|s| &s.model);
         match (now, &r.model) {
@@ -378,7 +380,7 @@ fn announce_if_changed(world: &World, logger: &mut Logger, force: bool) {
     let dt = world
         .get_resource::<quadsim_components::SimConfig>()
         .map_or(0.0, |c| c.dt_s);
-    let t_ns = step_time_ns(world.resource::<SimClock>().step, dt);
+    let t_ns = step_time_ns(step, dt);
     let robots = logger
         .robots
         .iter()
@@ -429,8 +431,18 @@ fn sample_all(world: &World, logger: &mut Logger, j: u64) {
         };
         let i = index;
         index += 1;
-        if !r.logged || r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
+        if !r.logged {
             continue;
+        }
+        if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
+            // recompiled before this step: the step ran with the new model,
+            // whose state sizes must match the snapshot's to sample it
+            if r.q.len() != sim.model.nq || r.v.len() != sim.model.nv {
+                continue;
+            }
+            r.data = Some(Data::new(&sim.model));
+            r.parents = frame_parents(&sim.model);
+            r.model = Some(sim.model.clone());
         }
         let data = r.data.as_mut().expect("snapshot made data");
         samples.push(sample_robot(
