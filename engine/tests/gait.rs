@@ -14,7 +14,6 @@ use quadsim_engine::gait::{
     TouchdownKind, raibert_offset,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
 /// 500 Hz, the default controller rate.
 const DT_S: f64 = 0.002;
@@ -835,50 +834,9 @@ fn capture_point_gain_stops_an_inverted_pendulum() {
 
 // ---------------------------------------------------------------- no heap
 
-/// The system allocator, counting the allocations of threads that opted in.
-struct CountingAlloc;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-
-fn note_allocation() {
-    let _ = COUNTING.try_with(|on| {
-        if on.get() {
-            let _ = COUNT.try_with(|c| c.set(c.get() + 1));
-        }
-    });
-}
-
-#[expect(
-    unsafe_code,
-    reason = "a GlobalAlloc impl is unsafe by definition; it forwards to System"
-)]
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_allocation();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static ALLOC: CountingAlloc = CountingAlloc;
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations_in;
 
 /// A controller tick (scheduler update with feet, placement, swing reference)
 /// allocates nothing.
@@ -890,28 +848,28 @@ fn control_tick_allocates_nothing() {
     let reach = ReachDown::default();
     let mut feet = [DVec3::ZERO; 4];
     let mut sink = 0.0;
-    COUNTING.with(|c| c.set(true));
-    for k in 0..2000 {
-        let contacts = [k % 7 != 0, true, k % 5 != 0, true];
-        s.update_with_feet(DT_S, &contacts, &feet);
-        for i in 0..4 {
-            let p = raibert_offset(
-                &params,
-                &PlacementInput {
-                    vel_m_s: DVec2::new(1.0, 0.0),
-                    vel_des_m_s: DVec2::new(1.5, 0.0),
-                    yaw_rate_rad_s: 0.1,
-                    hip_m: DVec2::new(0.25, 0.15),
-                    stance_duration_s: g.stance_duration_s(),
-                },
-            );
-            s.set_touchdown_target(i, DVec3::new(p.offset_m.x, p.offset_m.y, 0.0));
-            let r = s.leg(i).swing_reference(DEFAULT_LIFT_HEIGHT_M, &reach);
-            feet[i] = r.pos_m;
-            sink += r.acc_m_s2.z + s.loads()[i];
+    let n = allocations_in(|| {
+        for k in 0..2000 {
+            let contacts = [k % 7 != 0, true, k % 5 != 0, true];
+            s.update_with_feet(DT_S, &contacts, &feet);
+            for i in 0..4 {
+                let p = raibert_offset(
+                    &params,
+                    &PlacementInput {
+                        vel_m_s: DVec2::new(1.0, 0.0),
+                        vel_des_m_s: DVec2::new(1.5, 0.0),
+                        yaw_rate_rad_s: 0.1,
+                        hip_m: DVec2::new(0.25, 0.15),
+                        stance_duration_s: g.stance_duration_s(),
+                    },
+                );
+                s.set_touchdown_target(i, DVec3::new(p.offset_m.x, p.offset_m.y, 0.0));
+                let r = s.leg(i).swing_reference(DEFAULT_LIFT_HEIGHT_M, &reach);
+                feet[i] = r.pos_m;
+                sink += r.acc_m_s2.z + s.loads()[i];
+            }
         }
-    }
-    COUNTING.with(|c| c.set(false));
+    });
     assert!(sink.is_finite());
-    assert_eq!(COUNT.with(Cell::get), 0, "allocations during control ticks");
+    assert_eq!(n, 0, "allocations during control ticks");
 }
