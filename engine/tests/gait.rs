@@ -13,7 +13,6 @@ use quadsim_engine::gait::{
     PlacementInput, PlacementParams, RF, RH, ReachDown, SchedulerParams, SwingTrajectory,
     TouchdownKind, raibert_offset,
 };
-use std::alloc::{GlobalAlloc, Layout, System};
 
 /// 500 Hz, the default controller rate.
 const DT_S: f64 = 0.002;
