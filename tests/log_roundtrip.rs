@@ -452,7 +452,6 @@ fn report_rebuilds_the_summary_and_export_writes_tidy_csv() {
 
 #[test]
 fn a_recompiled_robot_is_drawn_again_and_keeps_being_logged() {
-    use bevy_ecs::prelude::*;
     let dir = tmp("recompile");
     let scn = parse_scenario(&dir.join("logtest.toml"), scenario(0.1, "")).unwrap();
     let mut world = build_world(&scn, Overrides::default()).unwrap();

@@ -42,8 +42,8 @@ pub const SCHEMA_ENCODING: &str = "jsonschema";
 pub const CHUNK_SIZE_BYTES: u64 = 512 * 1024;
 /// zstd level (fast; the JSON text compresses about 5:1).
 pub const ZSTD_LEVEL: u32 = 1;
-/// Records in flight between the simulation and the writer thread.
-pub const CHANNEL_CAPACITY: usize = 256;
+/// Batches in flight between the simulation and the writer thread.
+pub const CHANNEL_CAPACITY: usize = 16;
 /// Topic of the link transforms.
 pub const TF_TOPIC: &str = "/tf";
 /// Topic of the 3D scene.
@@ -84,7 +84,7 @@ fn thread_cpu_s() -> Option<f64> {
 }
 
 enum Cmd {
-    Record(LogRecord),
+    Records(Vec<LogRecord>),
     Json {
         topic: String,
         schema: Schema,
@@ -95,16 +95,43 @@ enum Cmd {
     Finish,
 }
 
+/// Records sent to the writer thread together: one wake-up of the writer
+/// per batch rather than per sample.
+pub const BATCH_RECORDS: usize = 16;
+
 /// The sink handed to the simulation's [`quadsim_systems::Logger`].
 struct ChannelSink {
     tx: SyncSender<Cmd>,
+    pending: Vec<LogRecord>,
+}
+
+impl ChannelSink {
+    fn send_pending(&mut self) {
+        if !self.pending.is_empty() {
+            let batch = std::mem::replace(&mut self.pending, Vec::with_capacity(BATCH_RECORDS));
+            // A send fails only when the writer thread stopped on an error;
+            // the error is reported by `McapLog::finish`.
+            let _ = self.tx.send(Cmd::Records(batch));
+        }
+    }
 }
 
 impl LogSink for ChannelSink {
     fn send(&mut self, record: LogRecord) {
-        // A send fails only when the writer thread stopped on an error; the
-        // error is reported by `McapLog::finish`.
-        let _ = self.tx.send(Cmd::Record(record));
+        self.pending.push(record);
+        if self.pending.len() >= BATCH_RECORDS {
+            self.send_pending();
+        }
+    }
+
+    fn flush(&mut self) {
+        self.send_pending();
+    }
+}
+
+impl Drop for ChannelSink {
+    fn drop(&mut self) {
+        self.send_pending();
     }
 }
 
@@ -163,6 +190,7 @@ impl McapLog {
     pub fn sink(&self) -> Box<dyn LogSink> {
         Box::new(ChannelSink {
             tx: self.tx.clone(),
+            pending: Vec::with_capacity(BATCH_RECORDS),
         })
     }
 
@@ -227,71 +255,118 @@ impl Channels {
     }
 }
 
-fn write_loop(
-    mut w: Writer<File>,
-    rx: Receiver<Cmd>,
+/// The writer thread's state.
+struct Output {
+    w: Writer<File>,
+    channels: Channels,
+    names: Vec<RobotNames>,
+    topics: Vec<Vec<String>>,
     ground: GroundMesh,
-) -> Result<WriterStats, String> {
-    let mut channels = Channels {
-        schemas: BTreeMap::new(),
-        topics: BTreeMap::new(),
-    };
-    let mut names: Vec<RobotNames> = Vec::new();
-    let mut topics: Vec<Vec<String>> = Vec::new();
-    let mut buf = Vec::with_capacity(16 * 1024);
-    let mut stats = WriterStats::default();
-    let mut busy = Duration::ZERO;
-    let mut scenes = 0u32;
-    let mut seq = 0u32;
-    let mut put = |w: &mut Writer<File>, channel: u16, t_ns: u64, data: &[u8]| {
-        seq = seq.wrapping_add(1);
-        w.write_to_known_channel(
-            &mcap::records::MessageHeader {
-                channel_id: channel,
-                sequence: seq,
-                log_time: t_ns,
-                publish_time: t_ns,
-            },
-            data,
-        )
-        .map_err(|e| e.to_string())
-    };
-    while let Ok(cmd) = rx.recv() {
-        let start = Instant::now();
-        match cmd {
-            Cmd::Record(LogRecord::Robots { t_ns, robots }) => {
-                names = robots.iter().map(RobotNames::new).collect();
-                topics = robots
+    scenes: u32,
+    seq: u32,
+    buf: Vec<u8>,
+    stats: WriterStats,
+}
+
+impl Output {
+    /// Writes `self.buf` (or `data`) as one message on `topic`.
+    fn put(
+        &mut self,
+        topic: &str,
+        schema: Schema,
+        t_ns: u64,
+        data: Option<&[u8]>,
+    ) -> Result<(), String> {
+        let id = self.channels.id(&mut self.w, topic, schema)?;
+        self.seq = self.seq.wrapping_add(1);
+        self.w
+            .write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: id,
+                    sequence: self.seq,
+                    log_time: t_ns,
+                    publish_time: t_ns,
+                },
+                data.unwrap_or(&self.buf),
+            )
+            .map_err(|e| e.to_string())?;
+        self.stats.messages += 1;
+        Ok(())
+    }
+
+    fn record(&mut self, record: LogRecord) -> Result<(), String> {
+        match record {
+            LogRecord::Robots { t_ns, robots } => {
+                self.names = robots.iter().map(RobotNames::new).collect();
+                self.topics = robots
                     .iter()
                     .map(|r| RobotTopic::ALL.iter().map(|t| t.topic(&r.name)).collect())
                     .collect();
-                encode_scene(&robots, &ground, t_ns, scenes > 0, &mut buf);
-                scenes += 1;
-                let id = channels.id(&mut w, SCENE_TOPIC, Schema::SceneUpdate)?;
-                put(&mut w, id, t_ns, &buf)?;
-                stats.messages += 1;
+                encode_scene(&robots, &self.ground, t_ns, self.scenes > 0, &mut self.buf);
+                self.scenes += 1;
+                self.put(SCENE_TOPIC, Schema::SceneUpdate, t_ns, None)
             }
-            Cmd::Record(LogRecord::Step { t_ns, samples }) => {
+            LogRecord::Step { t_ns, samples } => {
                 for s in &samples {
-                    let (Some(n), Some(tp)) = (names.get(s.robot), topics.get(s.robot)) else {
-                        continue;
-                    };
-                    for (topic, name) in RobotTopic::ALL.iter().zip(tp) {
-                        encode_robot(*topic, n, s, t_ns, &mut buf);
-                        let id = channels.id(&mut w, name, topic.schema())?;
-                        put(&mut w, id, t_ns, &buf)?;
-                        stats.messages += 1;
+                    for (k, topic) in RobotTopic::ALL.iter().enumerate() {
+                        let (Some(n), Some(tp)) =
+                            (self.names.get(s.robot), self.topics.get(s.robot))
+                        else {
+                            break;
+                        };
+                        encode_robot(*topic, n, s, t_ns, &mut self.buf);
+                        let name = tp[k].clone();
+                        self.put(&name, topic.schema(), t_ns, None)?;
                     }
                 }
                 let with_names: Vec<_> = samples
                     .iter()
-                    .filter_map(|s| names.get(s.robot).map(|n| (n, s)))
+                    .filter_map(|s| self.names.get(s.robot).map(|n| (n, s)))
                     .collect();
-                if !with_names.is_empty() {
-                    encode_transforms(&with_names, t_ns, &mut buf);
-                    let id = channels.id(&mut w, TF_TOPIC, Schema::FrameTransforms)?;
-                    put(&mut w, id, t_ns, &buf)?;
-                    stats.messages += 1;
+                if with_names.is_empty() {
+                    return Ok(());
+                }
+                encode_transforms(&with_names, t_ns, &mut self.buf);
+                self.put(TF_TOPIC, Schema::FrameTransforms, t_ns, None)
+            }
+        }
+    }
+}
+
+fn write_loop(
+    w: Writer<File>,
+    rx: Receiver<Cmd>,
+    ground: GroundMesh,
+) -> Result<WriterStats, String> {
+    let mut out = Output {
+        w,
+        channels: Channels {
+            schemas: BTreeMap::new(),
+            topics: BTreeMap::new(),
+        },
+        names: Vec::new(),
+        topics: Vec::new(),
+        ground,
+        scenes: 0,
+        seq: 0,
+        buf: Vec::with_capacity(16 * 1024),
+        stats: WriterStats::default(),
+    };
+    let mut busy = Duration::ZERO;
+    let finish = |mut out: Output, busy: Duration| -> Result<WriterStats, String> {
+        out.w.finish().map_err(|e| e.to_string())?;
+        let file = out.w.into_inner();
+        out.stats.file_bytes = file.metadata().map(|m| m.len()).unwrap_or(0);
+        out.stats.busy_s = busy.as_secs_f64();
+        out.stats.cpu_s = thread_cpu_s();
+        Ok(out.stats)
+    };
+    while let Ok(cmd) = rx.recv() {
+        let start = Instant::now();
+        match cmd {
+            Cmd::Records(records) => {
+                for r in records {
+                    out.record(r)?;
                 }
             }
             Cmd::Json {
@@ -299,30 +374,18 @@ fn write_loop(
                 schema,
                 t_ns,
                 data,
-            } => {
-                let id = channels.id(&mut w, &topic, schema)?;
-                put(&mut w, id, t_ns, &data)?;
-                stats.messages += 1;
-            }
-            Cmd::Metadata(name, metadata) => {
-                w.write_metadata(&Metadata { name, metadata })
-                    .map_err(|e| e.to_string())?;
-            }
+            } => out.put(&topic, schema, t_ns, Some(&data))?,
+            Cmd::Metadata(name, metadata) => out
+                .w
+                .write_metadata(&Metadata { name, metadata })
+                .map_err(|e| e.to_string())?,
             Cmd::Finish => {
-                w.finish().map_err(|e| e.to_string())?;
-                let file = w.into_inner();
-                stats.file_bytes = file.metadata().map(|m| m.len()).unwrap_or(0);
                 busy += start.elapsed();
-                stats.busy_s = busy.as_secs_f64();
-                stats.cpu_s = thread_cpu_s();
-                return Ok(stats);
+                return finish(out, busy);
             }
         }
         busy += start.elapsed();
     }
     // every sender dropped without `Finish`: still close the file properly
-    w.finish().map_err(|e| e.to_string())?;
-    stats.busy_s = busy.as_secs_f64();
-    stats.cpu_s = thread_cpu_s();
-    Ok(stats)
+    finish(out, busy)
 }

@@ -28,7 +28,7 @@ pub use control::{control_robot, control_robot_at, run_controllers};
 pub use ground::compile_ground;
 pub use log::{
     FootLog, LogRecord, LogSink, Logger, RobotInfo, RobotSample, finish_logging, frame_parents,
-    log_step, start_logging, step_time_ns,
+    log_due, log_step, start_logging, step_time_ns,
 };
 pub use metrics::{record_metrics, record_robot};
 pub use publish::{pose_sync_due, sync_link_poses};

@@ -44,6 +44,9 @@ use crate::control::run_controllers;
 pub trait LogSink: Send + Sync + 'static {
     /// Takes one record; records arrive in simulation-time order.
     fn send(&mut self, record: LogRecord);
+
+    /// Passes on whatever the sink holds back (the log is about to end).
+    fn flush(&mut self) {}
 }
 
 /// One robot's static description, sent before its first sample and again
@@ -341,21 +344,36 @@ pub fn finish_logging(world: &mut World, final_sample: bool) -> Option<Box<dyn L
             sample_all(world, &mut logger, n);
         });
     }
-    world.remove_resource::<Logger>().map(|l| l.sink)
+    world.remove_resource::<Logger>().map(|mut l| {
+        l.sink.flush();
+        l.sink
+    })
+}
+
+/// Run condition of [`log_step`]: a [`Logger`] exists and this step either
+/// samples (the step started at a multiple of the rate) or must snapshot its
+/// end state for the next step's sample. Other steps skip the system.
+pub fn log_due(clock: Res<SimClock>, logger: Option<Res<Logger>>) -> bool {
+    logger.is_some_and(|l| {
+        let s = clock.step;
+        s.is_multiple_of(l.every_steps) || (s > 0 && (s - 1).is_multiple_of(l.every_steps))
+    })
 }
 
 /// The `Publish`-stage system: samples the state the step started from when
-/// its index is due, then snapshots the new state for the next step.
+/// its index is due, and snapshots the new state when the next step's is.
 pub fn log_step(world: &mut World) {
     world.resource_scope(|world, mut logger: Mut<Logger>| {
         let step = world.resource::<SimClock>().step;
         let j = step.saturating_sub(1);
-        // a model recompiled before this step: its names and shapes first
-        announce_if_changed(world, &mut logger, false, j);
         if step > 0 && j.is_multiple_of(logger.every_steps) && logger.last_sampled != Some(j) {
+            // a model recompiled since the last sample: its names and shapes first
+            announce_if_changed(world, &mut logger, false, j);
             sample_all(world, &mut logger, j);
         }
-        snapshot(world, &mut logger);
+        if step.is_multiple_of(logger.every_steps) {
+            snapshot(world, &mut logger);
+        }
     });
 }
 

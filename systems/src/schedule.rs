@@ -5,7 +5,7 @@ use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleT
 
 use crate::contact::update_contacts;
 use crate::control::run_controllers;
-use crate::log::{Logger, log_step};
+use crate::log::{log_due, log_step};
 use crate::metrics::record_metrics;
 use crate::publish::{pose_sync_due, sync_link_poses};
 use crate::step::{advance_clock, step_robots};
@@ -129,7 +129,7 @@ pub fn register_integrate(schedule: &mut Schedule) {
 }
 
 /// Registers [`record_metrics`], [`sync_link_poses`] (gated by [`pose_sync_due`])
-/// and [`log_step`] (while a [`Logger`] exists).
+/// and [`log_step`] (while a [`Logger`](crate::Logger) exists, on the steps it samples or snapshots).
 pub fn register_publish(schedule: &mut Schedule) {
     schedule.add_systems(record_metrics.in_set(SimSystems::Publish));
     schedule.add_systems(
@@ -144,7 +144,7 @@ pub fn register_publish(schedule: &mut Schedule) {
     // ambiguous with them, so that such hooks do not fail the schedule build.
     schedule.add_systems(
         log_step
-            .run_if(resource_exists::<Logger>)
+            .run_if(log_due)
             .in_set(SimSystems::Publish)
             .after(sync_link_poses)
             .ambiguous_with_all(),
