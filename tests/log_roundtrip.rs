@@ -499,3 +499,81 @@ fn a_recompiled_robot_is_drawn_again_and_keeps_being_logged() {
         "{az} vs {fz}/{mass} - g"
     );
 }
+
+#[test]
+fn a_trotting_robot_logs_its_virtual_wrench_and_gait_phases() {
+    // Study A's trot under virtual model control for 1 s: the wrench logged
+    // last is the controller's, and the gait phases of a trot pair the
+    // diagonal legs, half a period apart from the other pair.
+    let dir = tmp("trot");
+    let src = r#"format_version = 1
+[world]
+dt_s = 0.0005
+duration_s = 1.0
+controller_rate_hz = 500
+default_ground = "concrete"
+
+[[robots]]
+name = "rex"
+model = "quad16"
+[robots.controller]
+kind = "vmc"
+period_s = 0.5
+four_leg_support_s = 0.1
+two_leg_support_s = 0.15
+v_x_mps = 0.5
+height_m = 0.5
+"#;
+    let scn = parse_scenario(&dir.join("trot.toml"), src.to_string()).unwrap();
+    let mut world = build_world(&scn, Overrides::default()).unwrap();
+    let path = dir.join("log.mcap");
+    let log = start_run_log(&scn, &mut world, &path, 4).unwrap();
+    world.sim.run(world.steps);
+    let sim = world.sim.robot(world.robots[0].1).unwrap();
+    let foot_names: Vec<String> = sim
+        .model
+        .feet
+        .iter()
+        .map(|&f| sim.model.frames[f].name.clone())
+        .collect();
+    log.finish(&mut world, &RunOutcome::default()).unwrap();
+    let c = read_log(&path).unwrap();
+    let wrenches: Vec<Value> = c
+        .topic("/rex/virtual_wrench")
+        .map(|m| m.json().unwrap())
+        .collect();
+    assert_eq!(wrenches.len(), 2000 / 4 + 1);
+    // the final sample ran the controller at the final state: its wrench now
+    let sim = world.sim.robot(world.robots[0].1).unwrap();
+    let quadsim_components::Controller::Walker(w) = &sim.run.controller else {
+        panic!("a vmc robot has the walking controller");
+    };
+    let last_w = wrenches.last().unwrap();
+    assert_eq!(v3(&last_w["force"]), w.wrench().lin.to_array());
+    assert_eq!(v3(&last_w["torque"]), w.wrench().ang.to_array());
+    // it carries (most of) the weight: upward, of the order of m·g
+    let fz = v3(&last_w["force"])[2];
+    let weight = sim.model.total_mass * 9.81;
+    assert!(
+        fz > 0.5 * weight && fz < 1.5 * weight,
+        "{fz} N vs {weight} N"
+    );
+    // gait phases: in [0, 1); diagonal pairs (LF, RH) and (RF, LH) in phase,
+    // the two pairs half a period apart
+    let feet = last(&c, "/rex/feet");
+    let phase = |name: &str| {
+        let i = foot_names.iter().position(|n| n == name).unwrap();
+        feet["feet"][i]["gait_phase"].as_f64().unwrap()
+    };
+    let circ = |a: f64, b: f64| {
+        let d = (a - b).rem_euclid(1.0);
+        d.min(1.0 - d)
+    };
+    for name in &foot_names {
+        let p = phase(name);
+        assert!((0.0..1.0).contains(&p), "{name}: {p}");
+    }
+    assert!(circ(phase("LF_foot"), phase("RH_foot")) < 1e-9);
+    assert!(circ(phase("RF_foot"), phase("LH_foot")) < 1e-9);
+    assert!((circ(phase("LF_foot"), phase("RF_foot")) - 0.5).abs() < 1e-9);
+}

@@ -376,12 +376,25 @@ pub fn encode_robot(
                 j.v3(f.force_n);
                 j.raw(",\"position\":");
                 j.v3(f.position_m);
-                j.raw(",\"gait_phase\":null}");
+                j.raw(",\"gait_phase\":");
+                match f.gait_phase {
+                    Some(x) => j.num(x),
+                    None => j.raw("null"),
+                }
+                j.raw("}");
             }
             j.raw("]");
         }
         RobotTopic::VirtualWrench => {
-            j.raw(",\"frame_id\":\"world\",\"force\":null,\"torque\":null");
+            j.raw(",\"frame_id\":\"world\",\"force\":");
+            match s.virtual_wrench {
+                Some((f, t)) => {
+                    j.v3(f);
+                    j.raw(",\"torque\":");
+                    j.v3(t);
+                }
+                None => j.raw("null,\"torque\":null"),
+            }
         }
     }
     j.raw("}");

@@ -137,19 +137,19 @@ impl Schema {
                                 "normal_force_n": number("Normal force magnitude (N)"),
                                 "force": vector3("Ground reaction force on the foot (N)"),
                                 "position": vector3("Contact point (m)"),
-                                "gait_phase": {"type": ["number", "null"], "description": "Gait phase in [0, 1) (null: no gait planner)"},
+                                "gait_phase": {"type": ["number", "null"], "description": "The leg's gait clock phase in [0, 1) (null: the controller has no gait)"},
                             },
                         },
                     },
                 }),
             ),
             Schema::Wrench => object(
-                "Virtual wrench on the base requested by virtual model control",
+                "Virtual wrench on the body requested by virtual model control at its last tick",
                 json!({
                     "timestamp": time("Simulation time"),
-                    "frame_id": string("Axes of the vectors"),
+                    "frame_id": string("Axes of the vectors: \"world\""),
                     "force": vector3_or_null("Force (N); null without virtual model control"),
-                    "torque": vector3_or_null("Torque (N m); null without virtual model control"),
+                    "torque": vector3_or_null("Torque about the centre of mass (N m); null without virtual model control"),
                 }),
             ),
             Schema::RobotMetrics => object(

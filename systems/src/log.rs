@@ -98,6 +98,9 @@ pub struct FootLog {
     /// Where the ground force acts: the sphere's deepest point in contact,
     /// else its lowest point (m, world).
     pub position_m: DVec3,
+    /// The leg's gait clock phase in [0, 1) from the walking controller's
+    /// scheduler (`None` without a gait).
+    pub gait_phase: Option<f64>,
 }
 
 /// One robot at one instant `t_j`. Frames: `world` is z up; "base" quantities
@@ -141,6 +144,9 @@ pub struct RobotSample {
     pub joint_velocity_desired: Option<Vec<f64>>,
     /// Feet in the model's foot order.
     pub feet: Vec<FootLog>,
+    /// The virtual wrench of virtual model control at its last tick: force
+    /// (N) and torque about the CoM (N·m), world axes; `None` without VMC.
+    pub virtual_wrench: Option<(DVec3, DVec3)>,
     /// Every link frame (one per `model.frames` entry) in its parent frame
     /// ([`frame_parents`]; the world for the base link): translation (m) and
     /// rotation, exact from the joint angles, so fixed offsets and the zero
@@ -532,6 +538,14 @@ fn sample_robot(
         c => c.joint_targets().map(<[f64]>::to_vec),
     };
     let velocity_targets = targets.as_ref().map(|t| vec![0.0; t.len()]);
+    let walker = match &sim.run.controller {
+        Controller::Walker(w) => Some(w),
+        _ => None,
+    };
+    let virtual_wrench = walker.map(|w| {
+        let f = w.wrench();
+        (f.lin, f.ang)
+    });
     // Newton's second law for the CoM with the forces acting at this instant.
     let mut f_ext = DVec3::ZERO;
     for e in evals.iter().filter(|e| e.active) {
@@ -559,6 +573,11 @@ fn sample_robot(
                 } else {
                     data.body_point_world(p.body, p.point_in_body) - DVec3::Z * p.radius_m
                 },
+                // the walker has one leg per foot, in the model's foot order
+                gait_phase: walker
+                    .map(|w| w.scheduler().legs())
+                    .and_then(|legs| legs.get(i))
+                    .map(|l| l.clock_phase),
             }
         })
         .collect();
@@ -581,6 +600,7 @@ fn sample_robot(
         joint_position_desired: targets,
         joint_velocity_desired: velocity_targets,
         feet,
+        virtual_wrench,
         link_transforms: link_transforms(model, data, q, base_orientation, parents),
     }
 }
