@@ -5,6 +5,7 @@ use bevy_ecs::prelude::*;
 use quadsim_components::{
     ControlRate, Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
 };
+use quadsim_engine::contact::evaluate;
 use quadsim_engine::control::walker::WalkerInput;
 use quadsim_engine::kinematics::forward_kinematics;
 
@@ -55,10 +56,19 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
         let n = run.n_feet.min(4);
         let mut contacts = [false; 4];
         let mut normals = [glam::DVec3::Z; 4];
+        // Contact flags at the controller's own instant (the `Contact` stage
+        // updates the persistent states later in this step): a pure
+        // evaluation, no anchor is moved.
         for i in 0..n {
-            contacts[i] = contact.states[i].in_contact;
-            if contact.states[i].in_contact {
-                normals[i] = contact.states[i].normal;
+            let e = evaluate(
+                &contact.points[i],
+                data,
+                &contact.terrain,
+                &contact.states[i],
+            );
+            contacts[i] = e.active;
+            if e.active {
+                normals[i] = e.normal;
             }
         }
         let nb = model.base_nv();
