@@ -577,3 +577,25 @@ height_m = 0.5
     assert!(circ(phase("RF_foot"), phase("LH_foot")) < 1e-9);
     assert!((circ(phase("LF_foot"), phase("RF_foot")) - 0.5).abs() < 1e-9);
 }
+
+#[test]
+fn a_file_that_is_not_a_log_is_named_in_the_error() {
+    let dir = tmp("notalog");
+    let path = dir.join("notes.mcap");
+    std::fs::write(&path, "not an mcap file\n").unwrap();
+    for cmd in [vec!["report"], vec!["export", "--csv", "out"]] {
+        let o = quadsim()
+            .arg(cmd[0])
+            .arg(&path)
+            .args(&cmd[1..])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("notes.mcap") && err.contains("not a readable MCAP log"),
+            "{err}"
+        );
+    }
+}

@@ -281,10 +281,7 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     } else {
         let every = log_every_steps(a, &scn)?;
         let path = out_dir.join(crate::log::LOG_FILE);
-        Some(
-            crate::log::start_run_log(&scn, &mut world, &path, every)
-                .map_err(|e| bad(e.to_string()))?,
-        )
+        Some(crate::log::start_run_log(&scn, &mut world, &path, every)?)
     };
     crate::log::interrupt::arm().map_err(bad)?;
     let start = Instant::now();
@@ -311,10 +308,7 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     crate::log::interrupt::clear();
     let wall = start.elapsed().as_secs_f64();
     let log_stats = match log {
-        Some(log) => Some(
-            log.finish(&mut world, &outcome)
-                .map_err(|e| bad(e.to_string()))?,
-        ),
+        Some(log) => Some(log.finish(&mut world, &outcome)?),
         None => None,
     };
     if let Some(d) = outcome.diverged {

@@ -61,6 +61,16 @@ pub struct LogError {
     pub message: String,
 }
 
+impl From<LogError> for crate::error::CliError {
+    /// A failure to write the log is an I/O failure on the log file (exit status 1).
+    fn from(e: LogError) -> Self {
+        crate::error::CliError::Io {
+            path: e.path,
+            source: std::io::Error::other(e.message),
+        }
+    }
+}
+
 /// What the writer thread did, for the run's report and the docs' cost figures.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct WriterStats {
