@@ -3,22 +3,25 @@
 //!
 //! # What a sample holds, and when
 //! A step runs `Control → Contact → … → Integrate → Publish` and takes the
-//! state from `t_j = j·dt` to `t_{j+1}`. Everything the simulation computed
-//! *at* `t_j` is still at hand in that step's `Publish` stage: the state
+//! state from `t_j = j·dt` to `t_{j+1}`. Everything the simulation used *at*
+//! `t_j` is still at hand in that step's `Publish` stage: the state
 //! `(q_j, v_j)` (kept here as a snapshot, because integration has overwritten
 //! the robot's own copy), the [`Observation`](quadsim_components::Observation)
-//! of the `Contact` stage (CoM, contact points), the contact forces evaluated
-//! at `t_j`, and the actuator command applied over the step. So the sample for
-//! `t_j` is written in step `j`'s `Publish` stage, with nothing recomputed but
-//! forward kinematics of the snapshot (for link poses and the base twist).
-//! The state after the last step, `t_N`, is sampled by [`finish_logging`],
-//! which runs the `Contact` and `Control` systems once more at that state,
-//! exactly as the next step would.
+//! of the `Contact` stage (CoM position and velocity), the contact states the
+//! step used, and the actuator command applied over the step. So the sample
+//! for `t_j` is written in step `j`'s `Publish` stage. Two things are
+//! evaluated again at the snapshot, with the engine's own functions: forward
+//! kinematics (link poses, base twist) and the contact forces (with the very
+//! contact states the step used, so they equal the forces of the step's first
+//! derivative evaluation). The state after the last step, `t_N`, is sampled
+//! by [`finish_logging`], which runs the `Contact` and `Control` systems once
+//! more at that state, exactly as the next step would.
 //!
 //! Samples are taken when `j` is a multiple of [`Logger::every_steps`], so a
 //! run of `N` steps logs `⌊N / every⌋ + 1` samples, `t = 0` included.
 //!
-//! The sampling is cheap (one forward-kinematics pass and a few copies);
+//! The sampling is cheap (one forward-kinematics pass, one contact
+//! evaluation and a few copies, on the steps that sample or snapshot only);
 //! encoding and compression happen in the sink, off the simulation thread.
 
 use std::sync::Arc;
