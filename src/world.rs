@@ -240,6 +240,7 @@ pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError
         sim_r.run.commands = commands;
         sim_r.run.n_feet = n_feet;
         sim_r.run.fall = FallCriteria {
+            body_points: fall_points(&model, &desc),
             min_base_height_m: 0.5 * stance_height,
             ..FallCriteria::default()
         };
@@ -299,6 +300,17 @@ fn robot_description(
     let robot = load_urdf(&path, &UrdfOptions::default())
         .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
     Ok((robot.description, robot.warnings))
+}
+
+/// The points whose touching the ground is a fall, checked geometrically
+/// every step: the knees (origins of bodies moved by a joint named `*knee*`)
+/// and the corners of the root link's first collision box.
+fn fall_points(model: &Model, desc: &RobotDescription) -> Vec<(usize, DVec3)> {
+    contact_points(model, desc, &["knees".to_string(), "torso".to_string()])
+        .into_iter()
+        .filter(|p| p.kind != ContactKind::Foot)
+        .map(|p| (p.body, p.point_in_body))
+        .collect()
 }
 
 /// Feet first (in the model's foot order), then knees and torso corners when asked.

@@ -169,3 +169,28 @@ fn foot_entities_hold_their_contact_state() {
     }
     assert_eq!(seen, 4);
 }
+
+/// Falls register without knee or torso contact points (issue 3): a limp
+/// quad16 collapses through where its torso would touch; its torso corners
+/// (checked geometrically every step) and its base height both say so.
+#[test]
+fn falls_register_without_torso_contact_points() {
+    let src = stand_scenario("concrete", "semi_implicit_euler", "")
+        .replace("duration_s = 10.0", "duration_s = 2.0");
+    let scn = parse_scenario(Path::new("limp.toml"), src).unwrap();
+    let mut w = build_world(
+        &scn,
+        Overrides {
+            threads: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    w.sim.run(w.steps);
+    let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
+    assert!(
+        m.fell,
+        "a limp robot collapsing onto its torso must register a fall"
+    );
+    assert!(m.fell_at_s.unwrap() < 2.0);
+}

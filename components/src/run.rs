@@ -60,8 +60,12 @@ pub struct Observation {
 }
 
 /// Fall criteria of one robot.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FallCriteria {
+    /// Points checked geometrically every step, whether or not they are
+    /// contact points: the torso box's corners and the knees (body index,
+    /// point in the body frame, m). One at or below the terrain is a fall.
+    pub body_points: Vec<(usize, glam::DVec3)>,
     /// Tilt (angle between base z and world z) beyond which the robot has fallen (rad).
     pub max_tilt_rad: f64,
     /// Base height above ground below which the robot has fallen (m): 50 % of nominal.
@@ -71,6 +75,7 @@ pub struct FallCriteria {
 impl Default for FallCriteria {
     fn default() -> Self {
         Self {
+            body_points: Vec::new(),
             max_tilt_rad: 60f64.to_radians(),
             min_base_height_m: 0.0,
         }

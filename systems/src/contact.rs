@@ -73,7 +73,14 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
         .points
         .iter()
         .zip(&contact.states)
-        .any(|(p, s)| s.in_contact && matches!(p.kind, ContactKind::Knee | ContactKind::Torso));
+        .any(|(p, s)| s.in_contact && matches!(p.kind, ContactKind::Knee | ContactKind::Torso))
+        || run.fall.body_points.iter().any(|&(b, p)| {
+            let w = data.body_point_world(b, p);
+            contact
+                .terrain
+                .closest(w)
+                .is_some_and(|sp| sp.depth_m >= 0.0)
+        });
     let tilt = obs.base.rot.z_axis.z.clamp(-1.0, 1.0).acos();
     obs.fallen = body_touch
         || tilt > run.fall.max_tilt_rad
