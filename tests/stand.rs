@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use quadsim::scenario::parse_scenario;
-use quadsim::world::{Overrides, build_world};
+use quadsim::world::{Overrides, World, build_world};
 
 const PRESETS: [(&str, f64); 4] = [
     ("concrete", 100_000.0),
@@ -34,6 +34,19 @@ model = "quad16"
     )
 }
 
+/// Parses `src` (named `path` in errors) and builds its world on one thread.
+fn one_thread_world(path: &Path, src: String) -> World {
+    let scn = parse_scenario(path, src).unwrap();
+    build_world(
+        &scn,
+        Overrides {
+            threads: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
 const PD: &str = r#"[robots.controller]
 kind = "joint_pd"
 kp_nm_per_rad = [300.0, 300.0, 300.0, 100.0, 300.0, 300.0, 300.0, 100.0, 300.0, 300.0, 300.0, 100.0, 300.0, 300.0, 300.0, 100.0]
@@ -44,19 +57,10 @@ gravity_compensation = "static"
 #[test]
 fn quad16_stands_on_every_preset() {
     for (ground, k) in PRESETS {
-        let scn = parse_scenario(
+        let mut w = one_thread_world(
             Path::new("stand.toml"),
             stand_scenario(ground, "semi_implicit_euler", PD),
-        )
-        .unwrap();
-        let mut w = build_world(
-            &scn,
-            Overrides {
-                threads: 1,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        );
         let root = w.robots[0].1;
         let start = w.sim.robot(root).unwrap().state.q[..3].to_vec();
         w.sim.run(w.steps);
@@ -90,15 +94,7 @@ fn passive_quad16_dropped_on_every_preset_stays_finite() {
             let src = stand_scenario(ground, integrator, "")
                 .replace("duration_s = 10.0", "duration_s = 2.0")
                 + "start_position_m = [0.0, 0.0, 0.8]\ncontact_points = [\"knees\", \"torso\"]\n";
-            let scn = parse_scenario(Path::new("drop.toml"), src).unwrap();
-            let mut w = build_world(
-                &scn,
-                Overrides {
-                    threads: 1,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+            let mut w = one_thread_world(Path::new("drop.toml"), src);
             w.sim.run(w.steps);
             let r = w.sim.robot(w.robots[0].1).unwrap();
             assert!(
@@ -125,19 +121,10 @@ fn passive_quad16_dropped_on_every_preset_stays_finite() {
 #[test]
 fn foot_entities_hold_their_contact_state() {
     use quadsim::components::{Foot, FootContact, Link};
-    let scn = parse_scenario(
+    let mut w = one_thread_world(
         Path::new("stand.toml"),
         stand_scenario("concrete", "semi_implicit_euler", PD),
-    )
-    .unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    );
     w.sim.run(400);
     w.sim.sync_link_poses();
     let root = w.robots[0].1;
@@ -177,15 +164,7 @@ fn foot_entities_hold_their_contact_state() {
 fn falls_register_without_torso_contact_points() {
     let src = stand_scenario("concrete", "semi_implicit_euler", "")
         .replace("duration_s = 10.0", "duration_s = 2.0");
-    let scn = parse_scenario(Path::new("limp.toml"), src).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = one_thread_world(Path::new("limp.toml"), src);
     w.sim.run(w.steps);
     let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
     assert!(
