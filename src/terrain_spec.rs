@@ -13,6 +13,7 @@ use quadsim_engine::terrain::{
 
 use crate::heightmap::read_heightmap;
 use crate::scenario::format::{GroundSpec, TerrainSpec};
+use crate::scenario::validate::as_f64;
 use crate::scenario::{Locator, ScenarioError};
 
 /// Default horizontal extent of a terrain (m).
@@ -62,9 +63,7 @@ pub fn ground_material(
 }
 
 fn num(t: &TerrainSpec, key: &str) -> Option<f64> {
-    t.params
-        .get(key)
-        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+    t.params.get(key).and_then(as_f64)
 }
 
 /// The terrain patch of one `[[terrains]]` entry; `seed` is its own random
@@ -182,20 +181,14 @@ pub fn terrain_patch(
                         .get(key)
                         .and_then(|v| v.as_array())
                         .ok_or_else(|| loc.at(&bp, format!("needs {key} = [x, y, z]")))?;
-                    let v: Vec<f64> = a
-                        .iter()
-                        .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
-                        .collect();
+                    let v: Vec<f64> = a.iter().filter_map(as_f64).collect();
                     if v.len() == 3 {
                         Ok(DVec3::new(v[0], v[1], v[2]))
                     } else {
                         Err(loc.at(&format!("{bp}.{key}"), "needs three numbers"))
                     }
                 };
-                let yaw = b
-                    .get("yaw_deg")
-                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-                    .unwrap_or(0.0);
+                let yaw = b.get("yaw_deg").and_then(as_f64).unwrap_or(0.0);
                 specs.push(BoxSpec {
                     centre_m: v3("center_m")?,
                     size_m: v3("size_m")?,

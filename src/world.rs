@@ -27,6 +27,7 @@ use quadsim_systems::Simulation;
 
 use crate::scenario::format::IntegratorSpec;
 use crate::scenario::spans::path_key;
+use crate::scenario::validate::as_f64;
 use crate::scenario::{Locator, Scenario, ScenarioError};
 use crate::terrain_spec::{ground_material, terrain_patch};
 use crate::urdf::{UrdfOptions, load_urdf};
@@ -208,12 +209,7 @@ pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError
                             "a command event needs a robot with controller kind \"vmc\"",
                         ));
                     };
-                    let num = |key: &str, d: f64| {
-                        e.params
-                            .get(key)
-                            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-                            .unwrap_or(d)
-                    };
+                    let num = |key: &str, d: f64| e.params.get(key).and_then(as_f64).unwrap_or(d);
                     let prev = w.command();
                     commands.push((
                         e.t_s,
@@ -359,12 +355,7 @@ fn controller(
     feet: &[ContactPoint],
 ) -> Result<Controller, ScenarioError> {
     let c = &r.controller;
-    let get = |k: &str, d: f64| {
-        c.params
-            .get(k)
-            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-            .unwrap_or(d)
-    };
+    let get = |k: &str, d: f64| c.params.get(k).and_then(as_f64).unwrap_or(d);
     match c.kind.as_deref().unwrap_or("none") {
         "none" => Ok(Controller::None),
         "joint_pd" => {
@@ -484,11 +475,10 @@ fn per_joint(
     default: Vec<f64>,
 ) -> Result<Vec<f64>, ScenarioError> {
     let n = default.len();
-    let as_num = |x: &toml::Value| x.as_float().or(x.as_integer().map(|i| i as f64));
     match v {
         None => Ok(default),
         Some(toml::Value::Array(a)) => {
-            let vals: Vec<f64> = a.iter().filter_map(as_num).collect();
+            let vals: Vec<f64> = a.iter().filter_map(as_f64).collect();
             if vals.len() != n || a.len() != n {
                 return Err(loc.at(
                     path,
@@ -503,7 +493,7 @@ fn per_joint(
             }
             Ok(vals)
         }
-        Some(x) => match as_num(x) {
+        Some(x) => match as_f64(x) {
             Some(g) if g.is_finite() && g >= 0.0 => Ok(vec![g; n]),
             _ => Err(loc.at(path, "must be a number ≥ 0 or an array of them")),
         },
@@ -518,19 +508,12 @@ fn push_event(
 ) -> Result<Push, ScenarioError> {
     let vec3 = |k: &str| -> Option<DVec3> {
         let a = e.params.get(k)?.as_array()?;
-        let v: Vec<f64> = a
-            .iter()
-            .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
-            .collect();
+        let v: Vec<f64> = a.iter().filter_map(as_f64).collect();
         (v.len() == 3).then(|| DVec3::new(v[0], v[1], v[2]))
     };
     let force = vec3("force_n")
         .ok_or_else(|| loc.at(&format!("{p}.force_n"), "needs three numbers (N)"))?;
-    let duration = e
-        .params
-        .get("duration_s")
-        .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-        .unwrap_or(0.0);
+    let duration = e.params.get("duration_s").and_then(as_f64).unwrap_or(0.0);
     let (body, placement) = match e.params.get("body").and_then(|v| v.as_str()) {
         None => (0, quadsim_engine::spatial::Transform::IDENTITY),
         Some(name) => {

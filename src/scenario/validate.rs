@@ -413,7 +413,8 @@ fn kind_keys(
     Ok(())
 }
 
-fn as_f64(v: &toml::Value) -> Option<f64> {
+/// A TOML number (float or integer) as f64.
+pub fn as_f64(v: &toml::Value) -> Option<f64> {
     match v {
         toml::Value::Float(x) => Some(*x),
         toml::Value::Integer(i) => Some(*i as f64),
