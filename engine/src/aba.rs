@@ -27,45 +27,61 @@ pub fn aba_from_kinematics(
     tau: &[f64],
     use_external: bool,
 ) {
+    let n = model.nbodies;
+    let nv = model.nv;
+    // Slices of known length up front, so that the loops below index
+    // without bounds checks (the body arrays all have `n` entries).
+    let (parent, idx_v, armature) = (&model.parent[..n], &model.idx_v[..n], &model.armature[..nv]);
+    let (v, tau) = (&v[..nv], &tau[..nv]);
+    let inertia_ref = &data.inertia_ref[..n];
+    let vel = &data.vel[..n];
+    let s_all = &data.s[..n];
+    let f_ext = &data.f_ext[..n];
+    let ia_all = &mut data.ia[..n];
+    let pa_all = &mut data.pa[..n];
+    let c_all = &mut data.c[..n];
+    let u_all = &mut data.u[..n];
+    let d_inv_all = &mut data.d_inv[..n];
+    let u_tau_all = &mut data.u_tau[..n];
     // Pass 1: bias forces and velocity-product accelerations.
-    for i in 0..model.nbodies {
-        let inertia = data.inertia_ref[i];
-        let vi = data.vel[i];
-        data.ia[i] = inertia.to_sym6();
+    for i in 0..n {
+        let inertia = &inertia_ref[i];
+        let vi = vel[i];
+        ia_all[i] = inertia.to_sym6();
         let mut p = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
-            p -= data.f_ext[i];
+            p -= f_ext[i];
         }
-        data.pa[i] = p;
+        pa_all[i] = p;
         if i > 0 {
-            data.c[i] = vi.cross(data.s[i] * v[model.idx_v[i]]);
+            c_all[i] = vi.cross(s_all[i] * v[idx_v[i]]);
         }
     }
     // Pass 2: articulated inertias, leaves to root. The downdated inertia
     // Iᴬ − U Uᵀ/D is added to the parent block by block, never stored whole
     // (a 6×6 does not fit the registers), and Iᴬ_a c = Iᴬ c − U (Uᵀc)/D.
-    for i in (1..model.nbodies).rev() {
-        let iv = model.idx_v[i];
-        let p = model.parent[i];
-        let s = data.s[i];
-        let c = data.c[i];
-        let (head, tail) = data.ia.split_at_mut(i);
-        let ia = &tail[0];
+    for i in (1..n).rev() {
+        let iv = idx_v[i];
+        let p = parent[i];
+        let s = s_all[i];
+        let c = c_all[i];
+        let ia = ia_all[i];
         let u = ia.mul_motion(s);
-        let d_inv = 1.0 / (s.dot(u) + model.armature[iv]);
-        let ut = tau[iv] - s.dot(data.pa[i]);
+        let d_inv = 1.0 / (s.dot(u) + armature[iv]);
+        let pai = pa_all[i];
+        let ut = tau[iv] - s.dot(pai);
         let ia_c = ia.mul_motion(c);
         let ul = u.lin * d_inv;
         let ua = u.ang * d_inv;
-        let parent = &mut head[p];
+        let parent = &mut ia_all[p];
         parent.m += ia.m - outer(ul, u.lin);
         parent.h += ia.h - outer(ua, u.lin);
         parent.i += ia.i - outer(ua, u.ang);
-        let pa = data.pa[i] + ia_c + u * ((ut - c.dot(u)) * d_inv);
-        data.u[i] = u;
-        data.d_inv[i] = d_inv;
-        data.u_tau[i] = ut;
-        data.pa[p] += pa;
+        let pa = pai + ia_c + u * ((ut - c.dot(u)) * d_inv);
+        u_all[i] = u;
+        d_inv_all[i] = d_inv;
+        u_tau_all[i] = ut;
+        pa_all[p] += pa;
     }
     // Pass 3: accelerations, root to leaves. Gravity is a fictitious upward
     // acceleration of the base; true accelerations are a' + a_grav.
