@@ -9,6 +9,7 @@ pub mod cli;
 pub mod error;
 pub mod heightmap;
 pub mod log;
+pub mod mem;
 pub mod model_source;
 pub mod scenario;
 pub mod terrain_spec;

@@ -71,12 +71,17 @@ pub struct Overrides {
     pub threads: usize,
 }
 
-/// Builds the world. Errors name the scenario file, line and key path.
+/// Builds the world. Errors name the scenario file, line and key path (for a
+/// herd robot's varied value, its `vary` entry).
 pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError> {
     let loc = Locator {
         path: &scn.path,
         src: &scn.source,
     };
+    build(scn, ov, loc).map_err(|e| crate::scenario::herd::relocate(&loc, &scn.file, e))
+}
+
+fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, ScenarioError> {
     let f = &scn.file;
     let w = &f.world;
     let seed = ov.seed.unwrap_or(w.seed);
@@ -124,7 +129,7 @@ pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError
     let mut robots_out = Vec::new();
     let mut warnings = Vec::new();
     for (i, r) in f.robots.iter().enumerate() {
-        let p = format!("robots[{i}]");
+        let p = f.robot_key_path(i);
         let (mut desc, warn) = robot_description(&loc, &p, r, base_dir)?;
         warnings.extend(warn.into_iter().map(|w| format!("{p} ('{}'): {w}", r.name)));
         if let Some(feet) = &r.feet {
@@ -159,10 +164,17 @@ pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError
             .as_ref()
             .and_then(|t| f.terrains.iter().find(|x| &x.name == t))
             .map_or(DVec3::ZERO, |t| DVec3::from_array(t.origin_m));
-        let start = r
-            .start_position_m
-            .map(DVec3::from_array)
-            .unwrap_or(DVec3::new(0.0, 0.0, stance_height));
+        let start = match (r.start_position_m, r.start_xy_m) {
+            (Some(_), Some(_)) => {
+                return Err(loc.at(
+                    &format!("{p}.start_xy_m"),
+                    "give start_position_m or start_xy_m, not both",
+                ));
+            }
+            (Some(s), None) => DVec3::from_array(s),
+            (None, Some([x, y])) => DVec3::new(x, y, stance_height),
+            (None, None) => DVec3::new(0.0, 0.0, stance_height),
+        };
         let xy = origin.truncate() + start.truncate();
         let ground_z = ground.height(xy.x, xy.y).ok_or_else(|| {
             loc.at(

@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod bench;
 pub mod dynamics;
 pub mod export;
 pub mod models;
@@ -37,6 +38,8 @@ pub enum Command {
     Report(report::ReportArgs),
     /// Export a log.mcap as one CSV per channel (`--csv DIR`).
     Export(export::ExportArgs),
+    /// Measure step throughput of herds by robot and thread count, and memory per robot.
+    Bench(bench::BenchArgs),
 }
 
 /// Runs the parsed command line.
@@ -50,5 +53,6 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Terrain(a) => terrain::run(a),
         Command::Report(a) => report::run(a),
         Command::Export(a) => export::run(a),
+        Command::Bench(a) => bench::run(a),
     }
 }

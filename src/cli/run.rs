@@ -482,6 +482,59 @@ pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: us
 }
 
 /// Prints the metrics table (one column per robot).
+/// Up to this many robots, the table has one column per robot.
+const WIDE_TABLE_MAX_ROBOTS: usize = 6;
+/// A herd's table lists this many robots (and every fallen one).
+const HERD_TABLE_ROWS: usize = 20;
+
+/// Many robots: one row each (the first [`HERD_TABLE_ROWS`] and every fallen
+/// one), the main metrics, and a count.
+fn print_herd_table(robots: &[Value]) {
+    let num = |r: &Value, k: &str| r[k].as_f64().unwrap_or(f64::NAN);
+    let abs_max = |r: &Value, k: &str| {
+        r[k].as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(Value::as_f64)
+                    .fold(0.0f64, |m, x| m.max(x.abs()))
+            })
+            .unwrap_or(f64::NAN)
+    };
+    println!(
+        "{:<16} {:>5} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}",
+        "robot", "fell", "speed m/s", "dist m", "p2p z m", "|roll| rad", "|pitch|", "margin m"
+    );
+    let fallen = robots
+        .iter()
+        .filter(|r| r["fell"] == Value::Bool(true))
+        .count();
+    let mut shown = 0;
+    for (i, r) in robots.iter().enumerate() {
+        let fell = r["fell"] == Value::Bool(true);
+        if i >= HERD_TABLE_ROWS && !fell {
+            continue;
+        }
+        shown += 1;
+        println!(
+            "{:<16} {:>5} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>10.4} {:>10}",
+            r["name"].as_str().unwrap_or("?"),
+            fell,
+            num(r, "mean_forward_speed_mps"),
+            num(r, "distance_m"),
+            num(r, "base_height_p2p_m"),
+            abs_max(r, "roll_range_rad"),
+            abs_max(r, "pitch_range_rad"),
+            r["min_stability_margin_m"]
+                .as_f64()
+                .map_or("-".to_string(), |m| format!("{m:.4}")),
+        );
+    }
+    if shown < robots.len() {
+        println!("… {} more robots in summary.json", robots.len() - shown);
+    }
+    println!("{} robots, {fallen} fell", robots.len());
+}
+
 pub fn print_table(summary: &Value) {
     let robots = summary["robots"].as_array().cloned().unwrap_or_default();
     let rows: [(&str, &str); 14] = [
@@ -513,17 +566,21 @@ pub fn print_table(summary: &Value) {
         ),
         other => other.to_string(),
     };
-    print!("{:<26}", "metric");
-    for r in &robots {
-        print!(" {:>18}", r["name"].as_str().unwrap_or("?"));
-    }
-    println!();
-    for (label, key) in rows {
-        print!("{label:<26}");
+    if robots.len() <= WIDE_TABLE_MAX_ROBOTS {
+        print!("{:<26}", "metric");
         for r in &robots {
-            print!(" {:>18}", fmt(&r[key]));
+            print!(" {:>18}", r["name"].as_str().unwrap_or("?"));
         }
         println!();
+        for (label, key) in rows {
+            print!("{label:<26}");
+            for r in &robots {
+                print!(" {:>18}", fmt(&r[key]));
+            }
+            println!();
+        }
+    } else {
+        print_herd_table(&robots);
     }
     let t = &summary["timing"];
     println!(

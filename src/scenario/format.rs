@@ -30,6 +30,68 @@ pub struct ScenarioFile {
     /// Timed events (pushes, commands, payloads).
     #[serde(default)]
     pub events: Vec<EventSpec>,
+    /// Herds: many robots from one template, appended to `robots` on load
+    /// (see [`crate::scenario::herd`]).
+    #[serde(default)]
+    pub herds: Vec<HerdSpec>,
+    /// Key path that errors about each robot name (`robots[i]`, or
+    /// `herds[h].robot` for a herd's robots); filled on load.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub robot_key_paths: Vec<String>,
+}
+
+impl ScenarioFile {
+    /// Key path of robot `i` for error messages.
+    pub fn robot_key_path(&self, i: usize) -> String {
+        self.robot_key_paths
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("robots[{i}]"))
+    }
+}
+
+/// `[[herds]]`: `count` robots from the `robot` template, varied by `vary`
+/// and placed by `layout`.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HerdSpec {
+    /// Name prefix: robots are `<name>-000`, `<name>-001`, …
+    pub name: String,
+    /// Number of robots (default with `combine = "grid"`: the grid's size).
+    pub count: Option<usize>,
+    /// `cycle` (default: robot k takes value k mod len of each variation) or
+    /// `grid` (robot k takes entry k of the Cartesian product).
+    pub combine: Option<String>,
+    /// Where the robots start.
+    #[serde(default)]
+    pub layout: HerdLayout,
+    /// A `[[robots]]` entry without `name`: every key of a robot.
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
+    pub robot: toml::Table,
+    /// Per-robot values by path in the template: a list, `{ from, to, steps }`
+    /// or `{ uniform = [lo, hi] }`.
+    #[serde(default)]
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
+    pub vary: BTreeMap<String, toml::Value>,
+}
+
+/// `[herds.layout]`: start positions of a herd's robots.
+#[derive(Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HerdLayout {
+    /// `grid` (default): rows along x, `columns` along y; `lanes`: robot k in
+    /// lane k mod n on terrain `terrains[lane]`, one after another along the lane.
+    pub kind: Option<String>,
+    /// Grid: [row, column] spacing (m, default [2, 2]); lanes: offset from one
+    /// robot to the next in its lane (m, default [2, 0]).
+    pub spacing_m: Option<[f64; 2]>,
+    /// Grid: robots per row (default ⌈√count⌉).
+    pub columns: Option<usize>,
+    /// Position of the first robot (m, world; for lanes, from the lane terrain's origin).
+    pub origin_m: Option<[f64; 2]>,
+    /// Lanes: one terrain name per lane.
+    pub terrains: Option<Vec<String>>,
 }
 
 /// Integrator choice.
@@ -192,6 +254,11 @@ pub struct RobotSpec {
     /// Start position of the base origin (m, world). z is above the terrain under it
     /// when `start_on_ground` is true. Default: the model's nominal standing height.
     pub start_position_m: Option<[f64; 3]>,
+    /// Start position of the base origin in the horizontal plane only (m,
+    /// world; relative to `terrain`'s origin when given); the height is the
+    /// model's nominal standing height above the ground there. Excludes
+    /// `start_position_m`.
+    pub start_xy_m: Option<[f64; 2]>,
     /// Start yaw (deg, about world z).
     #[serde(default)]
     pub start_yaw_deg: f64,

@@ -5,8 +5,10 @@
 //! values that fail validation after parsing (see [`ScenarioError`]).
 
 pub mod format;
+pub mod herd;
 pub mod spans;
 pub mod validate;
+pub mod vary;
 
 use std::path::{Path, PathBuf};
 
@@ -103,9 +105,10 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, ScenarioError> {
 pub fn parse_scenario(path: &Path, src: String) -> Result<Scenario, ScenarioError> {
     let loc = Locator { path, src: &src };
     check_format_version(&loc)?;
-    let file: ScenarioFile =
+    let mut file: ScenarioFile =
         toml::from_str(&src).map_err(|e| loc.at_span(e.span(), e.message().trim().to_string()))?;
-    validate::validate(&loc, &file)?;
+    herd::expand(&loc, &mut file)?;
+    validate::validate(&loc, &file).map_err(|e| herd::relocate(&loc, &file, e))?;
     let name = file.world.name.clone().unwrap_or_else(|| {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())

@@ -219,7 +219,7 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
 
     let mut robot_names: Vec<&str> = Vec::new();
     for (i, r) in f.robots.iter().enumerate() {
-        let p = format!("robots[{i}]");
+        let p = f.robot_key_path(i);
         if r.name.is_empty() {
             return Err(loc.at(&format!("{p}.name"), "must not be empty"));
         }

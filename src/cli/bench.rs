@@ -1,0 +1,235 @@
+//! `quadsim bench`: throughput of whole-world steps (gait, control, contact,
+//! dynamics, integration; no logging) for herds of trotting robots, by robot
+//! count and thread count, and the heap bytes each robot costs.
+//!
+//! Each configuration is a world of `n` robots on a concrete plane (a grid
+//! 1.5 m × 1 m apart), warmed up, then timed over `--repeats` blocks of
+//! `--steps` steps; the median block is reported. Memory per robot is
+//! (live heap bytes with `n` robots − bytes with none) / n, counted by the
+//! binary's allocator ([`crate::mem`]); models are per robot today.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use serde_json::{Value, json};
+
+use crate::error::{CliError, bad};
+use crate::scenario::parse_scenario;
+use crate::world::{Overrides, build_world};
+
+/// Arguments of `quadsim bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Robot counts, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 64, 256, 1000])]
+    pub robots: Vec<usize>,
+    /// Thread counts, comma-separated (0: one per core).
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
+    pub threads: Vec<usize>,
+    /// Timed steps per block (0.5 ms each).
+    #[arg(long, default_value_t = 400)]
+    pub steps: u64,
+    /// Timed blocks per configuration; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Untimed steps first (the robots settle on their feet and start trotting).
+    #[arg(long, default_value_t = 200)]
+    pub warmup: u64,
+    /// Robot model: `quad16` (trotting under VMC at 0.5 m/s) or `quad12` (standing under joint PD).
+    #[arg(long, default_value = "quad16")]
+    pub model: String,
+    /// Write the figures as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// The scenario of one configuration.
+pub fn herd_scenario(model: &str, robots: usize) -> Result<String, CliError> {
+    let controller = match model {
+        "quad16" => "kind = \"vmc\"\nv_x_mps = 0.5",
+        "quad12" => "kind = \"joint_pd\"",
+        other => {
+            return Err(bad(format!("--model {other}: expected quad16 or quad12")));
+        }
+    };
+    let mut s = String::from(
+        "format_version = 1\n[world]\nname = \"bench\"\ndt_s = 0.0005\nduration_s = 1.0\n\
+         seed = 1\ncontroller_rate_hz = 500\ndefault_ground = \"concrete\"\n",
+    );
+    if robots > 0 {
+        let cols = (robots as f64).sqrt().ceil() as usize;
+        s += &format!(
+            "[[herds]]\nname = \"r\"\ncount = {robots}\n\
+             layout = {{ kind = \"grid\", columns = {cols}, spacing_m = [1.5, 1.0] }}\n\
+             [herds.robot]\nmodel = \"{model}\"\nlog = false\n[herds.robot.controller]\n{controller}\n"
+        );
+    }
+    Ok(s)
+}
+
+/// One configuration's figures.
+#[derive(Debug, Clone)]
+pub struct BenchPoint {
+    /// Robots in the world.
+    pub robots: usize,
+    /// Worker threads.
+    pub threads: usize,
+    /// Median wall time of one block (s).
+    pub block_wall_s: f64,
+    /// Steps per block.
+    pub steps: u64,
+    /// Live heap bytes per robot, if counted.
+    pub bytes_per_robot: Option<f64>,
+}
+
+impl BenchPoint {
+    /// Robot-steps per wall-clock second.
+    pub fn robot_steps_per_s(&self) -> f64 {
+        (self.robots as u64 * self.steps) as f64 / self.block_wall_s
+    }
+    /// Wall time per robot-step (µs).
+    pub fn us_per_robot_step(&self) -> f64 {
+        1e6 / self.robot_steps_per_s()
+    }
+}
+
+/// Builds, warms up and times one configuration.
+pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoint, CliError> {
+    let build = |n: usize| {
+        let src = herd_scenario(&a.model, n)?;
+        let scn = parse_scenario(Path::new("bench.toml"), src).map_err(|e| bad(e.to_string()))?;
+        build_world(
+            &scn,
+            Overrides {
+                threads,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| bad(e.to_string()))
+    };
+    let before = crate::mem::live_bytes();
+    let empty = build(0)?;
+    let base = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
+    drop(empty);
+    let before = crate::mem::live_bytes();
+    let mut w = build(robots)?;
+    w.sim.run(a.warmup.max(1));
+    let with = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
+    let bytes_per_robot = match (with, base) {
+        (Some(w), Some(b)) if robots > 0 => Some((w - b) as f64 / robots as f64),
+        _ => None,
+    };
+    let mut blocks = Vec::with_capacity(a.repeats);
+    for _ in 0..a.repeats.max(1) {
+        let t = Instant::now();
+        w.sim.run(a.steps);
+        blocks.push(t.elapsed().as_secs_f64());
+    }
+    blocks.sort_by(f64::total_cmp);
+    let fell = w
+        .robots
+        .iter()
+        .filter(|(_, e)| {
+            w.sim
+                .robot(*e)
+                .is_some_and(|r| r.run.metrics.summary().fell)
+        })
+        .count();
+    if fell > 0 {
+        eprintln!("warning: {fell} of {robots} robots fell during the benchmark");
+    }
+    Ok(BenchPoint {
+        robots,
+        threads,
+        block_wall_s: blocks[blocks.len() / 2],
+        steps: a.steps,
+        bytes_per_robot,
+    })
+}
+
+/// Runs `quadsim bench`.
+pub fn run(a: BenchArgs) -> Result<(), CliError> {
+    if a.steps == 0 || a.robots.contains(&0) {
+        return Err(bad("--steps and every --robots count must be at least 1"));
+    }
+    herd_scenario(&a.model, 1)?;
+    let total = (a.robots.len() * a.threads.len()) as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    let mut points = Vec::new();
+    for &n in &a.robots {
+        for &t in &a.threads {
+            bar.set_message(format!("{n} robots, {t} threads"));
+            points.push(measure(&a, n, t)?);
+            bar.inc(1);
+        }
+    }
+    bar.finish_and_clear();
+    println!(
+        "{} ({}), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
+        a.model,
+        if a.model == "quad16" {
+            "trotting at 0.5 m/s under VMC"
+        } else {
+            "standing under joint PD"
+        },
+        a.repeats,
+        a.steps,
+        a.warmup
+    );
+    println!(
+        "{:>7} {:>7} {:>16} {:>14} {:>12} {:>10} {:>14}",
+        "robots",
+        "threads",
+        "robot-steps/s",
+        "µs/robot-step",
+        "× real time",
+        "speedup",
+        "KiB/robot"
+    );
+    let mut rows = Vec::new();
+    for p in &points {
+        let one = points
+            .iter()
+            .find(|q| q.robots == p.robots && q.threads == 1)
+            .map(|q| q.block_wall_s / p.block_wall_s);
+        let rt = p.steps as f64 * 0.0005 / p.block_wall_s;
+        println!(
+            "{:>7} {:>7} {:>16.0} {:>14.3} {:>12.2} {:>10} {:>14}",
+            p.robots,
+            p.threads,
+            p.robot_steps_per_s(),
+            p.us_per_robot_step(),
+            rt,
+            one.map_or("-".into(), |s| format!("{s:.2}×")),
+            p.bytes_per_robot
+                .map_or("-".into(), |b| format!("{:.1}", b / 1024.0)),
+        );
+        rows.push(json!({
+            "robots": p.robots,
+            "threads": p.threads,
+            "robot_steps_per_s": p.robot_steps_per_s(),
+            "us_per_robot_step": p.us_per_robot_step(),
+            "real_time_factor": rt,
+            "speedup_vs_1_thread": one,
+            "bytes_per_robot": p.bytes_per_robot,
+        }));
+    }
+    if let Some(path) = &a.json {
+        let v: Value = json!({
+            "model": a.model,
+            "steps_per_block": a.steps,
+            "repeats": a.repeats,
+            "warmup_steps": a.warmup,
+            "points": rows,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&v).expect("json") + "\n").map_err(
+            |e| CliError::Io {
+                path: path.display().to_string(),
+                source: e,
+            },
+        )?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,52 @@
+//! `quadsim bench` end to end: a tiny configuration writes its figures as
+//! JSON, with throughput and the counted memory per robot.
+
+use std::process::Command;
+
+#[test]
+fn bench_reports_throughput_and_memory_per_robot() {
+    let dir = std::env::temp_dir().join(format!("quadsim-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("bench.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_quadsim"))
+        .args([
+            "bench",
+            "--robots",
+            "1,4",
+            "--threads",
+            "1,2",
+            "--steps",
+            "20",
+            "--repeats",
+            "1",
+            "--warmup",
+            "10",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("robot-steps/s"), "{stdout}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let points = v["points"].as_array().unwrap();
+    assert_eq!(points.len(), 4);
+    for p in points {
+        assert!(p["robot_steps_per_s"].as_f64().unwrap() > 0.0, "{p}");
+        // a robot's model, data, controller and entities: kilobytes, not bytes or megabytes
+        let b = p["bytes_per_robot"].as_f64().unwrap();
+        assert!((4096.0..4.0 * 1024.0 * 1024.0).contains(&b), "{p}");
+    }
+    let e = Command::new(env!("CARGO_BIN_EXE_quadsim"))
+        .args(["bench", "--model", "quad99", "--robots", "1"])
+        .output()
+        .unwrap();
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("quad99"));
+    let _ = std::fs::remove_dir_all(dir);
+}
