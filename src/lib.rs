@@ -12,6 +12,7 @@ pub mod log;
 pub mod mem;
 pub mod model_source;
 pub mod scenario;
+pub mod study;
 pub mod terrain_spec;
 pub mod urdf;
 pub mod world;

@@ -8,6 +8,7 @@ pub mod export;
 pub mod models;
 pub mod report;
 pub mod run;
+pub mod sweep;
 pub mod terrain;
 
 /// quadsim: simulate quadruped robots.
@@ -40,6 +41,10 @@ pub enum Command {
     Export(export::ExportArgs),
     /// Measure step throughput of herds by robot and thread count, and memory per robot.
     Bench(bench::BenchArgs),
+    /// Run a study's variants (`kind = "sweep"`) in parallel, or one shard of them.
+    Sweep(sweep::SweepArgs),
+    /// Join the results of a sweep's shards.
+    Merge(sweep::MergeArgs),
 }
 
 /// Runs the parsed command line.
@@ -54,5 +59,7 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Report(a) => report::run(a),
         Command::Export(a) => export::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Sweep(a) => sweep::sweep(a),
+        Command::Merge(a) => sweep::merge(a),
     }
 }

@@ -142,6 +142,19 @@ pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
 
 /// Runs `quadsim check`.
 pub fn check(a: CheckArgs) -> Result<(), CliError> {
+    if let Some(kind) = std::fs::read_to_string(&a.scenario)
+        .ok()
+        .and_then(|s| crate::study::file_kind(&s))
+    {
+        let study = crate::study::load_study(&a.scenario).map_err(scenario_error)?;
+        println!(
+            "{}: ok (study, kind = \"{kind}\", {} variants of {})",
+            a.scenario.display(),
+            study.variants.len(),
+            study.base_path.display()
+        );
+        return Ok(());
+    }
     let scn = load_scenario(&a.scenario).map_err(scenario_error)?;
     let world = build_world(&scn, Overrides::default()).map_err(scenario_error)?;
     for w in world
@@ -339,7 +352,7 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
 /// not finite, a speed explodes (beyond [`DIVERGED_LINEAR_SPEED_MPS`] or
 /// [`DIVERGED_ANGULAR_SPEED_RADPS`]) or a contact sinks beyond
 /// [`DIVERGED_PENETRATION_M`]. Cheap enough to run after every step.
-fn check_finite(world: &World) -> Result<(), CliError> {
+pub fn check_finite(world: &World) -> Result<(), CliError> {
     let t = world.sim.clock().time_s;
     for (name, root) in &world.robots {
         let Some(r) = world.sim.robot(*root) else {

@@ -104,6 +104,15 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, ScenarioError> {
 /// Parses and validates scenario text (`path` names it in errors and resolves relative paths).
 pub fn parse_scenario(path: &Path, src: String) -> Result<Scenario, ScenarioError> {
     let loc = Locator { path, src: &src };
+    if let Some(kind) = crate::study::file_kind(&src) {
+        return Err(loc.at(
+            "kind",
+            format!(
+                "this is a study file (kind = \"{kind}\"), not a scenario: run it with `quadsim sweep {}`",
+                path.display()
+            ),
+        ));
+    }
     check_format_version(&loc)?;
     let mut file: ScenarioFile =
         toml::from_str(&src).map_err(|e| loc.at_span(e.span(), e.message().trim().to_string()))?;

@@ -1,0 +1,258 @@
+//! Studies: batches of runs of one base scenario with some of its values
+//! varied (`kind = "sweep"`), as `quadsim sweep` runs them.
+//!
+//! ```toml
+//! format_version = 1
+//! kind = "sweep"
+//! base = "trot.toml"                  # relative to this file
+//! duration_s = 5.0                    # optional override of world.duration_s
+//! [sweep]
+//! combine = "grid"                    # grid | cycle | random | lhs
+//! [vary]                              # paths in the base scenario
+//! "robots[0].controller.v_x_mps" = { from = 0.25, to = 0.75, steps = 3 }
+//! "world.default_ground" = ["concrete", "grass"]
+//! ```
+//!
+//! The variation syntax is the herds' ([`crate::scenario::vary`]); paths
+//! start at the scenario's top level. Variants are numbered from 0 in a
+//! fixed order, so a shard (`--shard I/N`: the I-th of N contiguous slices)
+//! and a merge of all shards give the same rows as one whole run.
+
+pub mod output;
+pub mod sample;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use serde_json::Value;
+
+use crate::scenario::spans::path_key;
+use crate::scenario::vary::{Variation, set_path};
+use crate::scenario::{Locator, ScenarioError, parse_scenario};
+
+/// A study file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyFile {
+    /// Must be 1.
+    pub format_version: i64,
+    /// `sweep` (run by `quadsim sweep`).
+    pub kind: String,
+    /// Study name (default: the file stem).
+    pub name: Option<String>,
+    /// The base scenario, relative to the study file.
+    pub base: String,
+    /// Simulated duration of each run (s), overriding the base's `world.duration_s`.
+    pub duration_s: Option<f64>,
+    /// How variants are formed.
+    #[serde(default)]
+    pub sweep: SweepSpec,
+    /// Path in the base scenario → variation.
+    pub vary: BTreeMap<String, toml::Value>,
+}
+
+/// `[sweep]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// `grid` (default: every combination), `cycle` (variant k takes value
+    /// k mod len of each), `random` or `lhs` (Latin hypercube) samples.
+    pub combine: Option<String>,
+    /// Number of variants for `random`, `lhs` and `cycle` (cycle's default: the longest list).
+    pub samples: Option<usize>,
+    /// Seed of random and Latin-hypercube samples (default 0).
+    pub seed: Option<u64>,
+}
+
+/// A loaded study: the file, its base scenario's text, and its variants.
+#[derive(Debug)]
+pub struct Study {
+    /// The study file.
+    pub path: PathBuf,
+    /// Its source (hashed so that shards of different studies are not merged).
+    pub source: String,
+    /// Its name.
+    pub name: String,
+    /// The parsed file.
+    pub file: StudyFile,
+    /// The base scenario's path.
+    pub base_path: PathBuf,
+    /// The base scenario's source.
+    pub base_source: String,
+    /// Every variant: path → value, in variant order.
+    pub variants: Vec<BTreeMap<String, toml::Value>>,
+}
+
+/// The top-level `kind` of a TOML file, if it has one (studies do, scenarios do not).
+pub fn file_kind(src: &str) -> Option<String> {
+    let doc = toml::de::DeTable::parse(src).ok()?;
+    doc.get_ref()
+        .iter()
+        .find(|(k, _)| k.get_ref().as_ref() == "kind")
+        .and_then(|(_, v)| match v.get_ref() {
+            toml::de::DeValue::String(s) => Some(s.to_string()),
+            _ => None,
+        })
+}
+
+/// Reads a study file and its base scenario, and forms its variants. Errors
+/// name the file, line and key path (`vary."robots[0].params.thigh.length_m"`).
+pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
+    let src = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+        file: path.to_path_buf(),
+        line: 0,
+        column: 0,
+        key_path: String::new(),
+        message: format!("cannot read the study: {e}"),
+    })?;
+    let loc = Locator { path, src: &src };
+    let file: StudyFile =
+        toml::from_str(&src).map_err(|e| loc.at_span(e.span(), e.message().trim().to_string()))?;
+    if file.format_version != crate::scenario::FORMAT_VERSION {
+        return Err(loc.at(
+            "format_version",
+            format!("must be {}", crate::scenario::FORMAT_VERSION),
+        ));
+    }
+    match file.kind.as_str() {
+        "sweep" => {}
+        "optimize" => {
+            return Err(loc.at(
+                "kind",
+                "optimisation studies are not available yet (README, \"Status\"); \
+                 kind = \"sweep\" runs a sweep",
+            ));
+        }
+        other => {
+            return Err(loc.at(
+                "kind",
+                format!("unknown study kind '{other}': expected \"sweep\""),
+            ));
+        }
+    }
+    if let Some(d) = file.duration_s
+        && !(d.is_finite() && d > 0.0)
+    {
+        return Err(loc.at("duration_s", "must be a positive number of seconds"));
+    }
+    if file.vary.is_empty() {
+        return Err(loc.at("vary", "varies nothing: name at least one path"));
+    }
+    let base_path = path.parent().unwrap_or(Path::new(".")).join(&file.base);
+    let base_source = std::fs::read_to_string(&base_path).map_err(|e| {
+        loc.at(
+            "base",
+            format!("cannot read the base scenario {}: {e}", base_path.display()),
+        )
+    })?;
+    // The base must be a valid scenario on its own.
+    parse_scenario(&base_path, base_source.clone())?;
+    let base_table: toml::Table = toml::from_str(&base_source).expect("parsed above");
+    let mut vary = Vec::new();
+    for (p, v) in &file.vary {
+        let kp = format!("vary.{}", path_key(p));
+        let var = Variation::parse(v).map_err(|e| loc.at(&kp, format!("'{p}': {e}")))?;
+        check_path(&base_path, &base_table, p, &var)
+            .map_err(|e| loc.at(&kp, format!("'{p}': {e}")))?;
+        vary.push((p.clone(), var));
+    }
+    let variants = sample::variants(&loc, &file.sweep, &vary)?;
+    let name = file.name.clone().unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "study".into())
+    });
+    Ok(Study {
+        path: path.to_path_buf(),
+        source: src.clone(),
+        name,
+        file,
+        base_path,
+        base_source,
+        variants,
+    })
+}
+
+/// A path must be settable in the base, and the base with the path's first
+/// value must still be a valid scenario: a typo (`wrld.dt_s`, `robots[3]`
+/// in a one-robot file, an unknown controller key) fails before any run.
+fn check_path(
+    base_path: &Path,
+    base: &toml::Table,
+    path: &str,
+    var: &Variation,
+) -> Result<(), String> {
+    let mut probe = base.clone();
+    let first = match var {
+        Variation::Uniform { lo, .. } => toml::Value::Float(*lo),
+        v => v.value(0, &mut crate::scenario::vary::draw_rng(0, "", "")),
+    };
+    set_path(&mut probe, path, first)?;
+    let src = toml::to_string(&probe).map_err(|e| e.to_string())?;
+    let scn = parse_scenario(base_path, src).map_err(|e| e.message_with_path())?;
+    crate::world::build_world(&scn, crate::world::Overrides::default())
+        .map_err(|e| e.message_with_path())?;
+    Ok(())
+}
+
+/// The scenario text of variant `k`: the base with the variant's values set.
+pub fn variant_source(study: &Study, k: usize) -> Result<String, String> {
+    let mut t: toml::Table = toml::from_str(&study.base_source).map_err(|e| e.to_string())?;
+    for (p, v) in &study.variants[k] {
+        set_path(&mut t, p, v.clone())?;
+    }
+    toml::to_string(&t).map_err(|e| e.to_string())
+}
+
+/// One variant's outcome.
+#[derive(Debug, Clone)]
+pub struct VariantResult {
+    /// Variant number.
+    pub index: usize,
+    /// Its varied values.
+    pub params: BTreeMap<String, toml::Value>,
+    /// `summary.json` of the run without `timing`, or the error that stopped it.
+    pub outcome: Result<Value, String>,
+}
+
+/// Runs variant `k` to the end on one thread (errors are recorded, not raised).
+pub fn run_variant(study: &Study, k: usize) -> VariantResult {
+    let params = study.variants[k].clone();
+    let outcome = (|| {
+        let src = variant_source(study, k)?;
+        let scn = parse_scenario(&study.base_path, src).map_err(|e| e.message_with_path())?;
+        let mut world = crate::world::build_world(
+            &scn,
+            crate::world::Overrides {
+                duration_s: study.file.duration_s,
+                threads: 1,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| e.message_with_path())?;
+        for _ in 0..world.steps {
+            world.sim.step();
+            crate::cli::run::check_finite(&world).map_err(|e| e.to_string())?;
+        }
+        let mut s = crate::cli::run::summary_json(&scn, &world, 0.0, 1);
+        s.as_object_mut().expect("object").remove("timing");
+        Ok(s)
+    })();
+    VariantResult {
+        index: k,
+        params,
+        outcome,
+    }
+}
+
+impl ScenarioError {
+    /// `key path: message` (the variant's scenario text has no useful line).
+    pub fn message_with_path(&self) -> String {
+        if self.key_path.is_empty() {
+            self.message.clone()
+        } else {
+            format!("{}: {}", self.key_path, self.message)
+        }
+    }
+}
