@@ -199,9 +199,22 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         let n_feet = model.feet.len();
         let mut model_desc = desc.clone();
         model_desc.name = r.model.clone();
-        let controller = controller(&loc, &p, r, &model_desc, &model, &q, &points[..n_feet])?;
+        let mut controller = controller(&loc, &p, r, &model_desc, &model, &q, &points[..n_feet])?;
+        // Payloads attached at start are part of the spawned robot; the
+        // controller was built on the bare robot and is told of the known ones.
+        let payloads = payload_specs(&loc, &p, r)?;
+        let mut spawn_desc = desc.clone();
+        for (k, (pl, spec)) in payloads.iter().enumerate() {
+            if spec.attached {
+                pl.attach_to(&mut spawn_desc)
+                    .map_err(|e| loc.at(&format!("{p}.payloads[{k}]"), e.to_string()))?;
+                if let (true, Controller::Walker(w)) = (spec.known_to_controller, &mut controller) {
+                    w.add_payload_mass_kg(pl.mass_kg);
+                }
+            }
+        }
         let root = sim
-            .spawn_robot(&desc)
+            .spawn_robot(&spawn_desc)
             .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
         let mut pushes = Vec::new();
         let mut commands = Vec::new();
@@ -231,6 +244,37 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
                             yaw_rate_radps: num("yaw_rate_radps", prev.yaw_rate_radps),
                         },
                     ));
+                }
+                "attach" | "detach" => {
+                    let name = e
+                        .params
+                        .get("payload")
+                        .and_then(|v| v.as_str())
+                        .unwrap_or("");
+                    let Some((pl, spec)) = payloads.iter().find(|(pl, _)| pl.name == name) else {
+                        return Err(loc.at(
+                            &format!("{ep}.payload"),
+                            format!(
+                                "robot '{}' has no payload '{name}' (declare it in [[robots.payloads]])",
+                                r.name
+                            ),
+                        ));
+                    };
+                    let parent_link = desc.root_link().map(|l| l.name.clone()).unwrap_or_default();
+                    sim.world
+                        .resource_mut::<quadsim_components::PayloadEvents>()
+                        .push(quadsim_components::PayloadEvent {
+                            t_s: e.t_s,
+                            robot: root,
+                            parent_link,
+                            payload: pl.clone(),
+                            action: if e.kind == "attach" {
+                                quadsim_components::PayloadAction::Attach
+                            } else {
+                                quadsim_components::PayloadAction::Detach
+                            },
+                            known_to_controller: spec.known_to_controller,
+                        });
                 }
                 _ => {}
             }
@@ -265,6 +309,80 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         seed,
         warnings,
     })
+}
+
+/// The robot's payloads from `[[robots.payloads]]`, checked (shape, size,
+/// mass, unique names).
+fn payload_specs<'a>(
+    loc: &Locator<'_>,
+    p: &str,
+    r: &'a crate::scenario::format::RobotSpec,
+) -> Result<
+    Vec<(
+        quadsim_engine::payload::Payload,
+        &'a crate::scenario::format::PayloadSpec,
+    )>,
+    ScenarioError,
+> {
+    use quadsim_engine::payload::Payload;
+    let mut out: Vec<(Payload, &crate::scenario::format::PayloadSpec)> = Vec::new();
+    for (k, s) in r.payloads.iter().enumerate() {
+        let kp = format!("{p}.payloads[{k}]");
+        if s.name.is_empty() || out.iter().any(|(pl, _)| pl.name == s.name) {
+            return Err(loc.at(
+                &format!("{kp}.name"),
+                format!("payload names must be unique and non-empty ('{}')", s.name),
+            ));
+        }
+        if !(s.mass_kg.is_finite() && s.mass_kg >= 0.0) {
+            return Err(loc.at(&format!("{kp}.mass_kg"), "must be a finite mass ≥ 0 kg"));
+        }
+        let dims_ok = s.size_m.iter().all(|x| x.is_finite() && *x > 0.0);
+        let kind = s.shape.as_deref().unwrap_or("box");
+        let shape = match (kind, s.size_m.as_slice()) {
+            ("box", [x, y, z]) if dims_ok => Shape::Box {
+                size_m: DVec3::new(*x, *y, *z),
+            },
+            ("sphere", [r]) if dims_ok => Shape::Sphere { radius_m: *r },
+            ("cylinder", [r, l]) if dims_ok => Shape::Cylinder {
+                radius_m: *r,
+                length_m: *l,
+            },
+            ("box" | "sphere" | "cylinder", _) => {
+                return Err(loc.at(
+                    &format!("{kp}.size_m"),
+                    format!(
+                        "a {kind} takes {} positive lengths (m)",
+                        match kind {
+                            "box" => "[x, y, z]: three",
+                            "sphere" => "[radius]: one",
+                            _ => "[radius, length]: two",
+                        }
+                    ),
+                ));
+            }
+            (other, _) => {
+                return Err(loc.at(
+                    &format!("{kp}.shape"),
+                    format!("unknown shape '{other}': expected box, sphere or cylinder"),
+                ));
+            }
+        };
+        let offset = DVec3::from_array(s.offset_m);
+        if !offset.is_finite() {
+            return Err(loc.at(&format!("{kp}.offset_m"), "must be finite"));
+        }
+        out.push((
+            Payload {
+                name: s.name.clone(),
+                mass_kg: s.mass_kg,
+                shape,
+                offset_m: offset,
+            },
+            s,
+        ));
+    }
+    Ok(out)
 }
 
 /// The robot's description: a built-in with parameter overrides, or a URDF

@@ -45,6 +45,7 @@ mod collider;
 mod forces;
 mod joint;
 mod link;
+mod payload;
 mod resources;
 mod robot;
 mod run;
@@ -62,6 +63,7 @@ pub use joint::{
 pub use link::{
     CenterOfMass, ComputedInertia, Foot, FootContact, FootPoint, Inertia, Link, LinkPose, Mass,
 };
+pub use payload::{PayloadAction, PayloadEvent, PayloadEvents};
 pub use resources::{
     PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
     ThreadPoolError,

@@ -35,6 +35,7 @@ pub mod metrics;
 pub mod model;
 pub mod nle;
 pub mod passive;
+pub mod payload;
 pub mod rnea;
 pub mod robots;
 pub mod spatial;

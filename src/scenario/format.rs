@@ -275,6 +275,32 @@ pub struct RobotSpec {
     /// Whether `quadsim run` logs this robot's per-step channels. Default true.
     #[serde(default = "default_true")]
     pub log: bool,
+    /// Rigid payloads on the torso (attached at start, or by `attach` events).
+    #[serde(default)]
+    pub payloads: Vec<PayloadSpec>,
+}
+
+/// `[[robots.payloads]]`: a uniform solid bolted to the torso.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PayloadSpec {
+    /// Name, unique on the robot; `attach`/`detach` events name it.
+    pub name: String,
+    /// Mass (kg).
+    pub mass_kg: f64,
+    /// `box` (default), `sphere` or `cylinder` (axis along torso z).
+    pub shape: Option<String>,
+    /// Box: [x, y, z] side lengths; sphere: [radius]; cylinder: [radius, length] (m).
+    pub size_m: Vec<f64>,
+    /// Centre of the payload from the torso centre, torso axes (m).
+    #[serde(default)]
+    pub offset_m: [f64; 3],
+    /// Attached at t = 0 (default true); otherwise at its `attach` event.
+    #[serde(default = "default_true")]
+    pub attached: bool,
+    /// Whether the walking controller's gravity compensation knows the mass (default true).
+    #[serde(default = "default_true")]
+    pub known_to_controller: bool,
 }
 
 fn default_true() -> bool {
@@ -299,7 +325,7 @@ pub struct EventSpec {
     pub t_s: f64,
     /// Robot name.
     pub robot: String,
-    /// `push`, `attach`, `detach`, `command`.
+    /// `push`, `command`, `attach`, `detach`.
     pub kind: String,
     /// Every other key, checked against the kind by the validator.
     #[serde(flatten)]

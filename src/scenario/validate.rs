@@ -146,6 +146,8 @@ pub const EVENT_KINDS: &[(&str, &[KeySpec])] = &[
             ("yaw_rate_radps", Domain::Finite, false),
         ],
     ),
+    ("attach", &[("payload", Domain::Text, true)]),
+    ("detach", &[("payload", Domain::Text, true)]),
 ];
 
 /// The ground presets of Study A.

@@ -45,6 +45,7 @@ pub fn build_compile_schedule() -> Schedule {
     schedule.set_executor(SingleThreadedExecutor::new());
     schedule.add_systems(
         (
+            crate::payload::apply_payload_events,
             mark_dirty_robots,
             compile_dirty_robots,
             crate::ground::compile_ground,
@@ -237,6 +238,12 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
             if old.model.nq == sim.model.nq && old.model.nv == sim.model.nv {
                 std::mem::swap(&mut sim.state, &mut old.state);
                 std::mem::swap(&mut sim.tau_actuator, &mut old.tau_actuator);
+                // Same bodies (a payload or an inertia edit): the controller,
+                // metrics and contact points (by body) stay valid and go on.
+                if old.model.nbodies == sim.model.nbodies && old.model.parent == sim.model.parent {
+                    std::mem::swap(&mut sim.run, &mut old.run);
+                    std::mem::swap(&mut sim.contact, &mut old.contact);
+                }
             }
             sim.last_worker = old.last_worker;
             *old = sim;

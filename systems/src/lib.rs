@@ -15,6 +15,7 @@ mod control;
 mod ground;
 mod log;
 mod metrics;
+mod payload;
 mod publish;
 mod schedule;
 mod simulation;
@@ -31,6 +32,7 @@ pub use log::{
     log_due, log_step, start_logging, step_time_ns,
 };
 pub use metrics::{record_metrics, record_robot};
+pub use payload::apply_payload_events;
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{
     SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,

@@ -65,6 +65,7 @@ impl Simulation {
         world.init_resource::<Ground>();
         world.init_resource::<DefaultGroundPlane>();
         world.init_resource::<ControlRate>();
+        world.init_resource::<quadsim_components::PayloadEvents>();
         Ok(Self {
             world,
             compile: build_compile_schedule(),

@@ -708,3 +708,18 @@ impl Walker {
         }
     }
 }
+
+impl Walker {
+    /// Changes the payload mass that gravity compensation carries (kg; a
+    /// payload attached or detached and known to the controller).
+    pub fn add_payload_mass_kg(&mut self, delta_kg: f64) {
+        let m = (self.vmc.params.payload_mass_kg + delta_kg).max(0.0);
+        self.vmc.params.payload_mass_kg = m;
+        self.params.vmc.payload_mass_kg = m;
+    }
+
+    /// The payload mass gravity compensation carries (kg).
+    pub fn payload_mass_kg(&self) -> f64 {
+        self.vmc.params.payload_mass_kg
+    }
+}

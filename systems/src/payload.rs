@@ -1,0 +1,88 @@
+//! Applies due payload events between steps: an attach spawns the payload's
+//! link and fixed joint under the robot's torso link, a detach despawns them;
+//! the compile stage that follows merges the change into the robot's model.
+
+use bevy_ecs::prelude::*;
+use bevy_ecs::relationship::RelationshipTarget;
+use quadsim_components::{
+    BelongsTo, Controller, JointConnection, Link, PayloadAction, PayloadEvents, RobotBatch,
+    RobotParts, SimClock, spawn_joint, spawn_link,
+};
+
+/// Half a step's worth of slack on event times (s): an event at t is applied
+/// before the step that starts at t, whatever the rounding of the clock.
+const TIME_SLACK_S: f64 = 1e-9;
+
+/// The compile stage's first system: applies every payload event due at
+/// the current time. Errors (an unknown link) are reported on stderr and the
+/// event is skipped; scenario loading checks names beforehand.
+pub fn apply_payload_events(world: &mut World) {
+    let Some(events) = world.get_resource::<PayloadEvents>() else {
+        return;
+    };
+    let now = world.resource::<SimClock>().time_s;
+    let due: Vec<_> = events.events[events.applied..]
+        .iter()
+        .take_while(|e| e.t_s <= now + TIME_SLACK_S)
+        .cloned()
+        .collect();
+    if due.is_empty() {
+        return;
+    }
+    world.resource_mut::<PayloadEvents>().applied += due.len();
+    for e in due {
+        let link_name = e.payload.link_name();
+        let find = |world: &World, name: &str| {
+            world.get::<RobotParts>(e.robot).and_then(|parts| {
+                parts
+                    .iter()
+                    .find(|p| world.get::<Link>(*p).is_some_and(|l| l.name == name))
+            })
+        };
+        let mass_change = match e.action {
+            PayloadAction::Attach => {
+                let Some(parent) = find(world, &e.parent_link) else {
+                    eprintln!("payload '{}': no link '{}'", e.payload.name, e.parent_link);
+                    continue;
+                };
+                if find(world, &link_name).is_some() {
+                    continue; // already attached
+                }
+                let (link, joint) = match e.payload.parts(&e.parent_link) {
+                    Ok(p) => p,
+                    Err(err) => {
+                        eprintln!("{err}");
+                        continue;
+                    }
+                };
+                let child = spawn_link(world, e.robot, &link);
+                spawn_joint(world, e.robot, &joint, JointConnection { parent, child });
+                e.payload.mass_kg
+            }
+            PayloadAction::Detach => {
+                let Some(link) = find(world, &link_name) else {
+                    continue; // not attached
+                };
+                let mut joints = world.query::<(Entity, &JointConnection, &BelongsTo)>();
+                let mount: Vec<Entity> = joints
+                    .iter(world)
+                    .filter(|(_, c, b)| c.child == link && b.0 == e.robot)
+                    .map(|(j, ..)| j)
+                    .collect();
+                for j in mount {
+                    world.despawn(j);
+                }
+                world.despawn(link);
+                -e.payload.mass_kg
+            }
+        };
+        if e.known_to_controller {
+            let mut batch = world.resource_mut::<RobotBatch>();
+            if let Some(sim) = batch.sims.iter_mut().find(|s| s.entity == e.robot)
+                && let Controller::Walker(w) = &mut sim.run.controller
+            {
+                w.add_payload_mass_kg(mass_change);
+            }
+        }
+    }
+}
