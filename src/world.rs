@@ -297,6 +297,10 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
             ..FallCriteria::default()
         };
         sim_r.run.metrics = MetricsAccumulator::new(yaw, 0.0);
+        sim_r.run.actuators = quadsim_engine::actuators::ActuatorStats::new(
+            &model.effort_limit[6..],
+            &model.velocity_limit[6..],
+        );
         robots_out.push((r.name.clone(), root));
     }
     sim.compile();

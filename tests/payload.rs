@@ -149,3 +149,40 @@ fn bad_payloads_name_their_key() {
         assert!(e.line > 0, "{e}");
     }
 }
+
+#[test]
+fn an_impossible_load_is_reported_not_carried_with_its_reason() {
+    // 60 kg on a 28 kg robot whose joints give at most 40 N·m
+    let dir = std::env::temp_dir().join(format!("quadsim-payload-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = scenario(3.0, &BOX.replace("mass_kg = 10.0", "mass_kg = 60.0")).replace(
+        "model = \"quad16\"\n",
+        "model = \"quad16\"\nparams = { \"actuator.effort_limit_nm\" = 40.0 }\n",
+    );
+    std::fs::write(dir.join("heavy.toml"), src).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_quadsim"))
+        .args(["run", "heavy.toml", "--quiet", "--no-log", "--out", "out"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    let r = &s["robots"][0];
+    assert_eq!(r["load"]["carried"], false, "{}", r["load"]);
+    let reason = r["load"]["reason"].as_str().unwrap();
+    assert!(["fell", "saturated"].contains(&reason), "{reason}");
+    assert!((r["total_mass_kg"].as_f64().unwrap() - 88.0).abs() < 1e-9);
+    let a = &r["actuators"];
+    assert!(
+        a["max_time_share_at_torque_limit"].as_f64().unwrap() > 0.05,
+        "{a}"
+    );
+    assert_eq!(a["max_peak_torque_share"].as_f64().unwrap(), 1.0);
+    let _ = std::fs::remove_dir_all(dir);
+}

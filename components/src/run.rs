@@ -95,6 +95,11 @@ pub struct RobotRun {
     pub observation: Observation,
     /// Metrics, recorded every step by the `Publish` stage.
     pub metrics: MetricsAccumulator,
+    /// Per-joint actuator load (peak torque share, time at the limits).
+    pub actuators: quadsim_engine::actuators::ActuatorStats,
+    /// ∫ commanded forward speed dt (m) and the time it covers (s): the
+    /// walking command as ramped, against which speed tracking is judged.
+    pub commanded_distance_m: (f64, f64),
     /// Scratch: saturated actuator torques of the joints (N·m).
     pub tau_joints: Vec<f64>,
     /// Velocity commands for the walking controller, `(t_s, command)`,
@@ -110,6 +115,8 @@ impl Default for RobotRun {
             fall: FallCriteria::default(),
             observation: Observation::default(),
             metrics: MetricsAccumulator::new(0.0, 0.0),
+            actuators: Default::default(),
+            commanded_distance_m: (0.0, 0.0),
             tau_joints: Vec::new(),
             commands: Vec::new(),
         }

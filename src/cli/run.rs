@@ -450,18 +450,75 @@ pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
     })
 }
 
+/// Share of the run a joint may spend at its torque limit before a load
+/// counts as not carried ("saturated").
+pub const SATURATED_TIME_SHARE: f64 = 0.05;
+/// Mean forward speed below this fraction of the walking command's mean (as
+/// ramped) counts as "failed to track speed" (above [`TRACKED_COMMAND_MIN_MPS`]).
+pub const SPEED_TRACKING_FRACTION: f64 = 0.9;
+/// Smallest forward command whose tracking is judged (m/s).
+pub const TRACKED_COMMAND_MIN_MPS: f64 = 0.05;
+
+/// A robot's summary entry: its metrics, total mass, actuator load and load
+/// verdict (definitions in scenarios/README.md, "Metrics").
+pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
+    let m = r.run.metrics.summary();
+    let mut v = metrics_json(name, &m);
+    let a = r.run.actuators.summary();
+    let nv0 = r.model.base_nv();
+    let joints: Vec<Value> = a
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(j, l)| {
+            json!({
+                "joint": r.model.joint_name.get(r.model.v_body.get(nv0 + j).copied().unwrap_or(0)).cloned().unwrap_or_default(),
+                "peak_torque_nm": l.peak_torque_nm,
+                "peak_torque_share": l.peak_torque_share,
+                "time_at_torque_limit_s": l.time_at_torque_limit_s,
+                "time_at_speed_limit_s": l.time_at_speed_limit_s,
+            })
+        })
+        .collect();
+    // The walking command as ramped, averaged over the run.
+    let (dist, t) = r.run.commanded_distance_m;
+    let command = (t > 0.0).then(|| dist / t);
+    let reason = if m.fell {
+        Some("fell")
+    } else if a.max_time_share_at_torque_limit > SATURATED_TIME_SHARE {
+        Some("saturated")
+    } else if command.is_some_and(|c| {
+        c > TRACKED_COMMAND_MIN_MPS && m.mean_forward_speed_mps < SPEED_TRACKING_FRACTION * c
+    }) {
+        Some("failed to track speed")
+    } else {
+        None
+    };
+    let o = v.as_object_mut().expect("object");
+    o.insert("total_mass_kg".into(), json!(r.model.total_mass));
+    o.insert(
+        "actuators".into(),
+        json!({
+            "max_peak_torque_share": a.max_peak_torque_share,
+            "max_time_share_at_torque_limit": a.max_time_share_at_torque_limit,
+            "max_time_share_at_speed_limit": a.max_time_share_at_speed_limit,
+            "joints": joints,
+        }),
+    );
+    o.insert(
+        "load".into(),
+        json!({"carried": reason.is_none(), "reason": reason}),
+    );
+    v
+}
+
 /// `summary.json`: deterministic fields, then `timing` (the only wall-clock part).
 pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: usize) -> Value {
     let clock = world.sim.clock();
     let robots: Vec<Value> = world
         .robots
         .iter()
-        .filter_map(|(name, root)| {
-            world
-                .sim
-                .robot(*root)
-                .map(|r| metrics_json(name, &r.run.metrics.summary()))
-        })
+        .filter_map(|(name, root)| world.sim.robot(*root).map(|r| robot_json(name, r)))
         .collect();
     let sha = Sha256::digest(scn.source.as_bytes());
     let used_threads = world

@@ -56,4 +56,10 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
         fallen: obs.fallen,
     };
     run.metrics.record(&sample);
+    run.actuators
+        .record(&tau_actuator[nv0..], &obs.qd_joints, dt_s);
+    if let quadsim_components::Controller::Walker(w) = &run.controller {
+        run.commanded_distance_m.0 += w.active_command().forward_mps * dt_s;
+        run.commanded_distance_m.1 += dt_s;
+    }
 }
