@@ -18,20 +18,19 @@ fn trot_with(extra: &str) -> Scenario {
     parse_scenario(Path::new(TROT), src).unwrap()
 }
 
-/// Issue 4: a 150 N push for 0.1 s on the torso at t = 5 s, sideways (to the
-/// robot's left, the hard direction: the trot's support diagonals are
-/// narrowest across), given as a scenario `push` event. The robot does not
-/// fall in the 10 s run, and its CoM's lateral drift — the largest gap to the
-/// unpushed run's lateral CoM displacement over t ∈ [5, 10] s — stays
-/// within 0.5 m.
-#[test]
-fn quad16_recovers_from_a_150_n_lateral_push_while_trotting() {
+/// Runs `scenarios/trot.toml` with a 150 N push for 0.1 s at t = 5 s along
+/// world y (`sign` +1: to the robot's left, −1: to its right) given as a
+/// scenario `push` event, and checks: no fall in the 10 s run, and the CoM's
+/// lateral drift — the largest gap to the unpushed run's lateral CoM
+/// displacement over t ∈ [5, 10] s — within 0.5 m.
+fn lateral_push_150_n(sign: f64) {
     let plain = load_scenario(Path::new(TROT)).unwrap();
     let reference = run_trace(&plain, "rex", None, None, 0.0).unwrap();
     assert!(reference.fell_at_s.is_none(), "the unpushed trot fell");
-    let pushed = trot_with(
-        "[[events]]\nt_s = 5.0\nrobot = \"rex\"\nkind = \"push\"\nforce_n = [0.0, 150.0, 0.0]\nduration_s = 0.1\n",
-    );
+    let pushed = trot_with(&format!(
+        "[[events]]\nt_s = 5.0\nrobot = \"rex\"\nkind = \"push\"\nforce_n = [0.0, {:.1}, 0.0]\nduration_s = 0.1\n",
+        sign * 150.0
+    ));
     let tr = run_trace(&pushed, "rex", None, None, 0.0).unwrap();
     assert!(tr.fell_at_s.is_none(), "fell at {:?}", tr.fell_at_s);
     assert_eq!(tr.t_s.len(), reference.t_s.len());
@@ -42,6 +41,24 @@ fn quad16_recovers_from_a_150_n_lateral_push_while_trotting() {
     assert!(drift <= 0.5, "lateral drift {drift} m");
     // Before the push the runs are identical (determinism).
     assert_eq!(tr.max_lateral_gap_m(&reference, 0.0), drift);
+}
+
+/// Issue 4: a 150 N push for 0.1 s on the torso at t = 5 s, sideways (the
+/// hard direction: the trot's support diagonals are narrowest across), to
+/// the robot's left, during the 0.5 m/s trot: no fall, lateral drift ≤ 0.5 m
+/// (measured: 0.06 m).
+#[test]
+fn quad16_recovers_from_a_150_n_lateral_push_while_trotting() {
+    lateral_push_150_n(1.0);
+}
+
+/// The same push to the robot's right: not reached. It falls at 6.4 s; the
+/// search finds 12.5 N·s to the right against 18.8 N·s to the left
+/// (docs/walking.md, "Pushes").
+#[test]
+#[ignore = "not reached: 150 N to the right at t = 5 s falls (largest recovered: 125 N)"]
+fn quad16_recovers_from_a_150_n_push_to_its_right() {
+    lateral_push_150_n(-1.0);
 }
 
 /// The bisection brackets a threshold: on a synthetic trial that recovers
