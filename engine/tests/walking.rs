@@ -527,8 +527,8 @@ fn peak_swing_torques(lift_m: f64, forward_mps: f64, duration_s: f64) -> SwingPe
 /// lift-off transition) of the hip pitch and of the knee grows with the
 /// lift, each lift at least 5 % above the one below, and none of these runs
 /// falls. The min-jerk swing's vertical acceleration grows in proportion to
-/// the lift (peak `≈ 23 h / T_sw²`, 510 m/s² per metre of lift at Study A's
-/// 0.15 s swing). The table for 5–17 cm is [`lift_height_torque_table`].
+/// the lift (peak `5.77 h / (T_sw/2)²`, 1030 m/s² per metre of lift at
+/// Study A's 0.15 s swing). The table for 5–17 cm is [`lift_height_torque_table`].
 #[test]
 fn peak_swing_torque_grows_with_lift_height() {
     let runs: Vec<SwingPeaks> = [0.05, 0.10, 0.14]
