@@ -43,6 +43,11 @@ pub struct RunArgs {
     /// overriding `world.log_rate_hz` (default: the controller rate).
     #[arg(long, value_name = "HZ|full")]
     pub log_rate: Option<String>,
+    /// After the run, search the largest push each robot recovers from
+    /// (as `[robots.analysis] push_search = true` for every robot; the
+    /// robot's other `push_*` keys apply). Adds `push_recovery` to summary.json.
+    #[arg(long)]
+    pub push_search: bool,
 }
 
 /// Arguments of `quadsim check`.
@@ -330,6 +335,8 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     let mut summary = summary_json(&scn, &world, wall, a.threads);
     if outcome.interrupted {
         summary["interrupted"] = json!(true);
+    } else {
+        add_push_searches(a, &scn, &mut summary)?;
     }
     let path = out_dir.join("summary.json");
     std::fs::write(
@@ -346,6 +353,43 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         interrupted: outcome.interrupted,
         log: log_stats,
     })
+}
+
+/// Runs the push searches the scenario (`[robots.analysis] push_search`) or
+/// `--push-search` asks for and adds each result to its robot's entry in
+/// `summary` as `push_recovery` (see `crate::analysis`).
+fn add_push_searches(a: &RunArgs, scn: &Scenario, summary: &mut Value) -> Result<(), CliError> {
+    use crate::analysis::{PushSearchOptions, push_search};
+    for r in &scn.file.robots {
+        if !(a.push_search || r.analysis.push_search) {
+            continue;
+        }
+        let opts = PushSearchOptions::from_spec(&r.analysis);
+        let found = push_search(scn, &r.name, &opts).map_err(scenario_error)?;
+        if !a.quiet {
+            println!(
+                "push search '{}': largest recovered {:.1} N·s ({:.0} N for {} s, {}) in {} trials{}",
+                r.name,
+                found.max_impulse_ns,
+                found.force_n,
+                found.duration_s,
+                found.direction.name(),
+                found.trials.len(),
+                match (found.reference_fell_at_s, found.bracketed) {
+                    (Some(t), _) => format!("; the unpushed run fell at {t:.3} s"),
+                    (None, false) => " (no fall up to the largest force: a lower bound)".into(),
+                    _ => String::new(),
+                }
+            );
+        }
+        if let Some(entry) = summary["robots"]
+            .as_array_mut()
+            .and_then(|rs| rs.iter_mut().find(|e| e["name"] == r.name.as_str()))
+        {
+            entry["push_recovery"] = found.to_json();
+        }
+    }
+    Ok(())
 }
 
 /// Stops with an error naming the robot, time and quantity when a state is

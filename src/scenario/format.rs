@@ -278,6 +278,9 @@ pub struct RobotSpec {
     /// Rigid payloads on the torso (attached at start, or by `attach` events).
     #[serde(default)]
     pub payloads: Vec<PayloadSpec>,
+    /// Analyses run after the main run (`[robots.analysis]`).
+    #[serde(default)]
+    pub analysis: AnalysisSpec,
 }
 
 /// `[[robots.payloads]]`: a uniform solid bolted to the torso.
@@ -301,6 +304,30 @@ pub struct PayloadSpec {
     /// Whether the walking controller's gravity compensation knows the mass (default true).
     #[serde(default = "default_true")]
     pub known_to_controller: bool,
+}
+
+/// `[robots.analysis]`: analyses that re-run the scenario after the main run
+/// and add their result to `summary.json` (see `scenarios/README.md`).
+#[derive(Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisSpec {
+    /// Search the largest push the robot recovers from (`push_recovery` in
+    /// `summary.json`). Default false; `quadsim run --push-search` turns it on
+    /// for every robot.
+    #[serde(default)]
+    pub push_search: bool,
+    /// Push start (s). Default 5.
+    pub push_t_s: Option<f64>,
+    /// Push duration (s), fixed during the search. Default 0.1.
+    pub push_duration_s: Option<f64>,
+    /// `left` (default), `right`, `forward` or `backward`, in the start heading frame.
+    pub push_direction: Option<String>,
+    /// Upper end of the searched forces (N). Default 1000.
+    pub push_max_force_n: Option<f64>,
+    /// Bisection steps. Default 6.
+    pub push_iterations: Option<u32>,
+    /// Length of each trial after the push's start (s). Default 3.
+    pub push_settle_s: Option<f64>,
 }
 
 fn default_true() -> bool {

@@ -264,6 +264,7 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
                 format!("unknown terrain '{t}' (terrains: {})", list(&terrain_names)),
             ));
         }
+        analysis(loc, &format!("{p}.analysis"), &r.analysis)?;
         for (j, c) in r.contact_points.iter().enumerate() {
             if !["knees", "torso"].contains(&c.as_str()) {
                 return Err(loc.at(
@@ -303,6 +304,49 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
             ));
         }
         kind_keys(loc, &p, "event", &e.kind, EVENT_KINDS, &e.params)?;
+    }
+    Ok(())
+}
+
+/// `[robots.analysis]`: times, durations and forces > 0, a known direction,
+/// 1 to 30 bisection steps.
+fn analysis(
+    loc: &Locator<'_>,
+    p: &str,
+    a: &crate::scenario::format::AnalysisSpec,
+) -> Result<(), ScenarioError> {
+    if let Some(t) = a.push_t_s
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(loc.at(
+            &format!("{p}.push_t_s"),
+            format!("must be a finite time ≥ 0 (s), got {t}"),
+        ));
+    }
+    for (k, v) in [
+        ("push_duration_s", a.push_duration_s),
+        ("push_max_force_n", a.push_max_force_n),
+        ("push_settle_s", a.push_settle_s),
+    ] {
+        if let Some(v) = v {
+            positive(loc, &format!("{p}.{k}"), v)?;
+        }
+    }
+    if let Some(n) = a.push_iterations
+        && !(1..=30).contains(&n)
+    {
+        return Err(loc.at(
+            &format!("{p}.push_iterations"),
+            format!("must be 1 to 30, got {n}"),
+        ));
+    }
+    if let Some(d) = &a.push_direction
+        && crate::analysis::PushDirection::from_name(d).is_none()
+    {
+        return Err(loc.at(
+            &format!("{p}.push_direction"),
+            format!("unknown direction '{d}' (left, right, forward, backward)"),
+        ));
     }
     Ok(())
 }

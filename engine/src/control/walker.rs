@@ -357,7 +357,8 @@ impl Walker {
 
     /// Changes the velocity command (a scenario `command` event).
     /// The speeds ramp toward it at `command_accel_mps2`; the yaw rate
-    /// applies at once.
+    /// applies at once. A gait without swing (`stand`) ignores the command
+    /// and holds its place and heading.
     pub fn set_command(&mut self, command: VmcCommand) {
         self.command_set = command;
         self.vmc.command.yaw_rate_radps = command.yaw_rate_radps;
@@ -458,6 +459,11 @@ impl Walker {
             let c = &mut self.vmc.command;
             c.forward_mps += (self.command_set.forward_mps - c.forward_mps).clamp(-dv, dv);
             c.lateral_mps += (self.command_set.lateral_mps - c.lateral_mps).clamp(-dv, dv);
+        }
+        if !self.scheduler.gait().has_swing() {
+            // A stand takes no steps, so it can neither walk nor turn: VMC
+            // would only lean the body over its feet until it fell.
+            self.vmc.command = VmcCommand::STAND;
         }
 
         // 1. gait, with the feet's world positions for lift-off/touchdown points
