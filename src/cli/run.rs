@@ -437,18 +437,42 @@ pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
     })
 }
 
+/// One robot's object in `summary.json` and in the log's `metrics` message:
+/// [`metrics_json`], plus `study_b` (Study B's Table 4 torque comparison)
+/// for a robot run by the `prescribed` controller in hybrid mode on quad12.
+pub fn robot_json(name: &str, sim: &quadsim_components::RobotSim) -> Value {
+    let mut v = metrics_json(name, &sim.run.metrics.summary());
+    if let quadsim_components::Controller::Prescribed(p) = &sim.run.controller
+        && let Some(c) = &p.study_b
+        && c.sim_hip.samples > 0
+    {
+        let joint = |m: &quadsim_engine::legs::study_b_dynamics::TorqueStats,
+                     s: &quadsim_engine::legs::study_b_dynamics::TorqueStats| {
+            json!({
+                "model_peak_nm": m.peak_nm,
+                "model_mean_nm": m.mean_abs_nm,
+                "sim_peak_nm": s.peak_nm,
+                "sim_mean_nm": s.mean_abs_nm,
+                "peak_ratio_sim_to_model": s.peak_nm / m.peak_nm,
+                "mean_ratio_sim_to_model": s.mean_abs_nm / m.mean_abs_nm,
+            })
+        };
+        v["study_b"] = json!({
+            "hip_tau2": joint(&c.model_hip, &c.sim_hip),
+            "knee_tau3": joint(&c.model_knee, &c.sim_knee),
+            "samples": c.sim_hip.samples,
+        });
+    }
+    v
+}
+
 /// `summary.json`: deterministic fields, then `timing` (the only wall-clock part).
 pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: usize) -> Value {
     let clock = world.sim.clock();
     let robots: Vec<Value> = world
         .robots
         .iter()
-        .filter_map(|(name, root)| {
-            world
-                .sim
-                .robot(*root)
-                .map(|r| metrics_json(name, &r.run.metrics.summary()))
-        })
+        .filter_map(|(name, root)| world.sim.robot(*root).map(|r| robot_json(name, r)))
         .collect();
     let sha = Sha256::digest(scn.source.as_bytes());
     let used_threads = world

@@ -174,6 +174,7 @@ impl Schema {
                     "steps": {"type": "integer"},
                     "min_stability_margin_m": {"type": ["number", "null"]},
                     "distance_m": {"type": "number"},
+                    "study_b": {"type": "object", "description": "Study B's Table 4 comparison (prescribed controller, hybrid mode, quad12 only): per joint (hip_tau2, knee_tau3) the peak and mean |torque| (N m) of the fixed-base Lagrangian leg model on the prescribed trajectory and of the simulation, and their ratios"},
                 }),
             ),
             Schema::FrameTransforms => object(

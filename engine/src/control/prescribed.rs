@@ -48,6 +48,7 @@
 use crate::description::RobotDescription;
 use crate::integrate::ImposedJoints;
 use crate::legs::ik::IkOptions;
+use crate::legs::study_b_dynamics::{StudyBLegDynamics, StudyBTorqueComparison};
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
 use glam::DVec3;
@@ -248,6 +249,8 @@ pub struct Prescribed {
     qddd_ref: Vec<f64>,
     scratch: [Vec<f64>; 5],
     ik: IkOptions,
+    /// Time of the last update (s).
+    t_ref_s: f64,
 }
 
 /// Central-difference step of the reference's derivatives (s).
@@ -315,6 +318,7 @@ impl Prescribed {
             qddd_ref: vec![0.0; nj],
             scratch: std::array::from_fn(|_| vec![0.0; nj]),
             ik: IkOptions::default(),
+            t_ref_s: 0.0,
         };
         c.update_reference(model, 0.0);
         Ok(c)
@@ -354,6 +358,7 @@ impl Prescribed {
     /// Recomputes the reference (angles, velocities, accelerations) at `t_s`.
     pub fn update_reference(&mut self, model: &Model, t_s: f64) {
         let h = DIFF_STEP_S;
+        self.t_ref_s = t_s;
         let mut s = std::mem::take(&mut self.scratch);
         self.joints_at(model, t_s, &mut s[0]);
         self.joints_at(model, t_s - h, &mut s[1]);
@@ -368,6 +373,11 @@ impl Prescribed {
                 (s[4][j] - 2.0 * s[2][j] + 2.0 * s[1][j] - s[3][j]) / (2.0 * h * h * h);
         }
         self.scratch = s;
+    }
+
+    /// Time of the last update (s).
+    pub fn reference_time_s(&self) -> f64 {
+        self.t_ref_s
     }
 
     /// Reference joint angles of the last update (rad, joints only).
@@ -417,6 +427,32 @@ impl Prescribed {
                 + self.params.pd_kd_nms_per_rad[j] * (self.qd_ref[j] - qd_j[j]);
             let lim = model.effort_limit[nv0 + j];
             tau_joints[j] = t.clamp(-lim, lim);
+        }
+    }
+
+    /// Adds one sample of Study B's Table 4 comparison: for every 3-DOF leg,
+    /// Study B's fixed-base Lagrangian leg model ([`StudyBLegDynamics::STUDY`],
+    /// no ground force) on the last update's reference against the simulated
+    /// joint torques `tau_joints` (N·m, joints only) at that instant.
+    pub fn sample_study_b(
+        &self,
+        model: &Model,
+        tau_joints: &[f64],
+        out: &mut StudyBTorqueComparison,
+    ) {
+        let nv0 = model.base_nv();
+        for leg in &self.legs {
+            let vi = leg.v_indices();
+            if vi.len() != 3 {
+                continue;
+            }
+            let j = [vi[0] - nv0, vi[1] - nv0, vi[2] - nv0];
+            let m = StudyBLegDynamics::STUDY.torques(
+                j.map(|k| self.q_ref[k]),
+                j.map(|k| self.qd_ref[k]),
+                j.map(|k| self.qdd_ref[k]),
+            );
+            out.add(m, j.map(|k| tau_joints[k]));
         }
     }
 }
