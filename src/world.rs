@@ -483,8 +483,7 @@ fn controller(
         }
         "prescribed" => {
             let kp = format!("{p}.controller");
-            let nj = model.nv - 6;
-            let mut pp = PrescribedParams::defaults(nj);
+            let mut pp = PrescribedParams::defaults_for(model, q);
             pp.mode = match c.params.get("mode").and_then(|v| v.as_str()) {
                 None | Some("hybrid") => PrescribedMode::Hybrid,
                 Some("pd") => PrescribedMode::Pd,

@@ -94,7 +94,13 @@ fn fixed_base_hybrid(dt: f64, integrator: Integrator) -> (f64, f64, f64) {
     // Prescribed reads its leg geometry from the floating model (same legs)
     let fmodel = Model::from_description(&desc, BaseKind::Floating).unwrap();
     let fq = robots::nominal_q("quad12").unwrap();
-    let mut ctl = Prescribed::new(&desc, &fmodel, PrescribedParams::defaults(12), &fq).unwrap();
+    let mut ctl = Prescribed::new(
+        &desc,
+        &fmodel,
+        PrescribedParams::defaults_for(&fmodel, &fq),
+        &fq,
+    )
+    .unwrap();
     let mut ws = StepWorkspace::new(&model);
     ws.passive = PassiveParams::none();
     ws.imposed = Some(ctl.imposed());
@@ -193,7 +199,7 @@ impl Trot {
         let desc = robots::builtin("quad12").unwrap();
         let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
         let q = robots::nominal_q("quad12").unwrap();
-        let mut params = PrescribedParams::defaults(12);
+        let mut params = PrescribedParams::defaults_for(&model, &q);
         params.trot = trot;
         let ctl = Prescribed::new(&desc, &model, params, &q).unwrap();
         let mut ws = StepWorkspace::new(&model);

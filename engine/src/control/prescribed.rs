@@ -33,8 +33,10 @@
 //!   dynamics; a PD term on acceleration, `kp` 1/s², `kd` 1/s, removes
 //!   integration drift). Torques are not limited.
 //! - [`PrescribedMode::Pd`]: stiff joint PD toward the reference,
-//!   `τ = kp (q_r − q) + kd (q̇_r − q̇)` (N·m/rad, N·m·s/rad), saturated at the
-//!   effort limits like every actuator.
+//!   `τ = kp (q_r − q) + kd (q̇_r − q̇)` (N·m/rad, N·m·s/rad), at the
+//!   controller rate, saturated at the effort limits like every actuator.
+//!   Default gains: each joint at a 15 Hz bandwidth for its apparent inertia
+//!   ([`PrescribedParams::defaults_for`]).
 //!
 //! # Defaults (Study B)
 //! Study B trots at 93 mm/s with a stride frequency in its "good" range
@@ -45,6 +47,7 @@
 //! nominal speed `L/(βT)` is Study B's 93.3 mm/s), lift 20 mm, body height
 //! the start height (quad12's stance: 0.14 m), ramp one period.
 
+use crate::data::Data;
 use crate::description::RobotDescription;
 use crate::integrate::ImposedJoints;
 use crate::legs::ik::IkOptions;
@@ -52,6 +55,8 @@ use crate::legs::study_b_dynamics::{StudyBLegDynamics, StudyBTorqueComparison};
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
 use glam::DVec3;
+
+use super::joint_pd::bandwidth_gains;
 
 /// How the prescribed joint motion is applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,26 +186,38 @@ pub struct PrescribedParams {
     /// Hybrid mode: drift-correction damping (1/s). Default 2·2π·20 Hz
     /// (critical).
     pub hybrid_kd_per_s: f64,
-    /// PD mode: stiffness per joint (N·m/rad). Default 100.
+    /// PD mode: stiffness per joint (N·m/rad); see [`PrescribedParams::defaults_for`].
     pub pd_kp_nm_per_rad: Vec<f64>,
-    /// PD mode: damping per joint (N·m·s/rad). Default 2.
+    /// PD mode: damping per joint (N·m·s/rad).
     pub pd_kd_nms_per_rad: Vec<f64>,
 }
 
 impl PrescribedParams {
-    /// Defaults for a robot with `n_joints` joints (see the module docs).
-    pub fn defaults(n_joints: usize) -> PrescribedParams {
+    /// Defaults for `model` at the start configuration `q` (nq): hybrid
+    /// mode, Study B's trot, drift correction at 20 Hz critically damped,
+    /// PD gains from [`bandwidth_gains`] at `q`, 15 Hz, critically damped
+    /// (`kp = M_ii ω²`, `kd = 2 M_ii ω`: quad12's stance gives about 11 N·m/rad
+    /// and 0.24 N·m·s/rad at the knee, 0.2–0.3 N·m·s/rad per 0.01 kg·m² of
+    /// apparent inertia elsewhere). Uniform stiff gains (100 N·m/rad,
+    /// 2 N·m·s/rad) went unstable on quad12's light knee under the 500 Hz
+    /// sampled controller (`kd T / M_ii` ≈ 3 > 2).
+    pub fn defaults_for(model: &Model, q: &[f64]) -> PrescribedParams {
         let w = std::f64::consts::TAU * 20.0;
+        let mut data = Data::new(model);
+        let (kp, kd) = bandwidth_gains(model, &mut data, q, PD_BANDWIDTH_HZ, 1.0);
         PrescribedParams {
             mode: PrescribedMode::Hybrid,
             trot: TrotTrajectory::default(),
             hybrid_kp_per_s2: w * w,
             hybrid_kd_per_s: 2.0 * w,
-            pd_kp_nm_per_rad: vec![100.0; n_joints],
-            pd_kd_nms_per_rad: vec![2.0; n_joints],
+            pd_kp_nm_per_rad: kp,
+            pd_kd_nms_per_rad: kd,
         }
     }
 }
+
+/// Closed-loop bandwidth of the default PD gains (Hz).
+pub const PD_BANDWIDTH_HZ: f64 = 15.0;
 
 /// Why a prescribed controller cannot be built.
 #[derive(Debug, thiserror::Error, PartialEq)]
