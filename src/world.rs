@@ -10,15 +10,18 @@ use std::path::Path;
 use bevy_ecs::prelude::Entity;
 use glam::{DQuat, DVec3};
 use quadsim_components::{
-    ControlRate, Controller, DefaultGroundPlane, FallCriteria, Push, SimConfig, Terrain,
+    ControlRate, Controller, DefaultGroundPlane, FallCriteria, PrescribedRun, Push, SimConfig,
+    Terrain,
 };
 use quadsim_engine::contact::{ContactKind, ContactPoint, ContactState};
 use quadsim_engine::control::joint_pd::{JointPd, bandwidth_gains, static_stance_torques};
+use quadsim_engine::control::prescribed::{Prescribed, PrescribedMode, PrescribedParams};
 use quadsim_engine::control::vmc::VmcCommand;
 use quadsim_engine::control::walker::{Walker, WalkerParams};
 use quadsim_engine::description::{RobotDescription, Shape};
 use quadsim_engine::gait::{Gait, GaitKind};
 use quadsim_engine::integrate::{Integrator, State};
+use quadsim_engine::legs::study_b_dynamics::StudyBTorqueComparison;
 use quadsim_engine::metrics::MetricsAccumulator;
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::terrain::{DefaultGround, Terrain as _, TerrainUnion};
@@ -199,7 +202,16 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         let n_feet = model.feet.len();
         let mut model_desc = desc.clone();
         model_desc.name = r.model.clone();
-        let mut controller = controller(&loc, &p, r, &model_desc, &model, &q, &points[..n_feet])?;
+        let mut controller = controller(
+            &loc,
+            &p,
+            every,
+            r,
+            &model_desc,
+            &model,
+            &q,
+            &points[..n_feet],
+        )?;
         // Payloads attached at start are part of the spawned robot; the
         // controller was built on the bare robot and is told of the known ones.
         let payloads = payload_specs(&loc, &p, r)?;
@@ -288,6 +300,11 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         sim_r.contact.states = vec![ContactState::default(); points.len()];
         sim_r.contact.points = points;
         sim_r.contact.pushes = pushes;
+        if let Controller::Prescribed(p) = &controller
+            && p.controller.params.mode == PrescribedMode::Hybrid
+        {
+            sim_r.workspace.imposed = Some(p.controller.imposed());
+        }
         sim_r.run.controller = controller;
         sim_r.run.commands = commands;
         sim_r.run.n_feet = n_feet;
@@ -479,9 +496,14 @@ fn contact_points(model: &Model, desc: &RobotDescription, extra: &[String]) -> V
     points
 }
 
+#[expect(
+    clippy::too_many_arguments,
+    reason = "everything a controller is built from"
+)]
 fn controller(
     loc: &Locator<'_>,
     p: &str,
+    every_steps: u64,
     r: &crate::scenario::format::RobotSpec,
     desc: &RobotDescription,
     model: &Model,
@@ -592,6 +614,57 @@ fn controller(
             let w = Walker::new(desc, model, wp)
                 .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
             Ok(Controller::Walker(Box::new(w)))
+        }
+        "prescribed" => {
+            let kp = format!("{p}.controller");
+            let mut pp = PrescribedParams::defaults_for(model, q);
+            pp.mode = match c.params.get("mode").and_then(|v| v.as_str()) {
+                None | Some("hybrid") => PrescribedMode::Hybrid,
+                Some("pd") => PrescribedMode::Pd,
+                Some(other) => {
+                    return Err(loc.at(
+                        &format!("{kp}.mode"),
+                        format!("unknown mode '{other}' (hybrid, pd)"),
+                    ));
+                }
+            };
+            let t = &mut pp.trot;
+            t.period_s = get("period_s", t.period_s);
+            t.duty_factor = get("duty_factor", t.duty_factor);
+            t.step_length_m = get("step_length_m", t.step_length_m);
+            t.lift_height_m = get("lift_height_m", t.lift_height_m);
+            t.ramp_s = get("ramp_s", t.period_s);
+            t.body_height_m = c.params.get("body_height_m").and_then(as_f64);
+            if let Err(msg) = t.validate() {
+                let field = msg.split_whitespace().next().unwrap_or("");
+                return Err(loc.at(&format!("{kp}.{field}"), msg));
+            }
+            pp.hybrid_kp_per_s2 = get("hybrid_kp_per_s2", pp.hybrid_kp_per_s2);
+            pp.hybrid_kd_per_s = get("hybrid_kd_per_s", pp.hybrid_kd_per_s);
+            pp.pd_kp_nm_per_rad = per_joint(
+                loc,
+                &format!("{kp}.kp_nm_per_rad"),
+                c.params.get("kp_nm_per_rad"),
+                pp.pd_kp_nm_per_rad,
+            )?;
+            pp.pd_kd_nms_per_rad = per_joint(
+                loc,
+                &format!("{kp}.kd_nms_per_rad"),
+                c.params.get("kd_nms_per_rad"),
+                pp.pd_kd_nms_per_rad,
+            )?;
+            let hybrid = pp.mode == PrescribedMode::Hybrid;
+            let ctl = Prescribed::new(desc, model, pp, q)
+                .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
+            // Study B's Table 4 comparison: its leg model is quad12's leg
+            let study_b =
+                (hybrid && desc.name == robots::quad12::NAME).then(StudyBTorqueComparison::default);
+            Ok(Controller::Prescribed(Box::new(PrescribedRun {
+                controller: ctl,
+                study_b,
+                sample_every_steps: every_steps,
+                steps: 0,
+            })))
         }
         other => Err(loc.at(
             &format!("{p}.controller.kind"),

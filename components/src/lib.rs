@@ -71,4 +71,6 @@ pub use resources::{
 pub use robot::{
     BelongsTo, CompileFailure, Robot, RobotBase, RobotIndex, RobotModelName, RobotParts,
 };
-pub use run::{ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, RobotRun};
+pub use run::{
+    ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, PrescribedRun, RobotRun,
+};

@@ -4,8 +4,10 @@
 
 use glam::DVec3;
 use quadsim_engine::control::joint_pd::JointPd;
+use quadsim_engine::control::prescribed::Prescribed;
 use quadsim_engine::control::vmc::VmcCommand;
 use quadsim_engine::control::walker::Walker;
+use quadsim_engine::legs::study_b_dynamics::StudyBTorqueComparison;
 use quadsim_engine::metrics::{FootSample, MetricsAccumulator};
 use quadsim_engine::spatial::Transform;
 
@@ -20,6 +22,41 @@ pub enum Controller {
     JointPd(JointPd),
     /// Study A's walking controller: gait, VMC, force QP, swing legs.
     Walker(Box<Walker>),
+    /// Study B's prescribed trot (joint angles from foot-trajectory IK).
+    Prescribed(Box<PrescribedRun>),
+}
+
+/// The `prescribed` controller with its run bookkeeping.
+#[derive(Clone, Debug)]
+pub struct PrescribedRun {
+    /// The controller (its reference is refreshed every step in hybrid
+    /// mode, at the controller rate in PD mode).
+    pub controller: Prescribed,
+    /// Study B's Table 4 comparison, accumulated every
+    /// `sample_every_steps` steps once the trajectory's ramp is over
+    /// (hybrid mode on quad12 only; `None` otherwise).
+    pub study_b: Option<StudyBTorqueComparison>,
+    /// Steps between samples of the comparison (the controller rate).
+    pub sample_every_steps: u64,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+impl PrescribedRun {
+    /// After a hybrid step: the torques that realised the step (N·m, joints
+    /// only) against Study B's leg model on the reference the step started
+    /// from, on every `sample_every_steps`-th step after the ramp.
+    pub fn record_step(&mut self, model: &quadsim_engine::Model, tau_joints: &[f64]) {
+        let due = self.steps.is_multiple_of(self.sample_every_steps.max(1));
+        self.steps += 1;
+        let c = &self.controller;
+        if let Some(cmp) = &mut self.study_b
+            && due
+            && c.reference_time_s() > c.params.trot.ramp_s
+        {
+            c.sample_study_b(model, tau_joints, cmp);
+        }
+    }
 }
 
 impl Controller {
@@ -29,6 +66,7 @@ impl Controller {
             Controller::None => None,
             Controller::JointPd(pd) => Some(&pd.target_rad),
             Controller::Walker(w) => Some(w.joint_targets()),
+            Controller::Prescribed(p) => Some(p.controller.q_ref()),
         }
     }
 }

@@ -114,6 +114,8 @@ fn main() {
             .ok()
             .and_then(|x| x.parse().ok())
             .unwrap_or(0.0),
+        // the legs' mounts, as before placement hips existed
+        placement_hips_m: Vec::new(),
     };
     let params = if std::env::var("DEF").is_ok() {
         let mut d = WalkerParams::default_for(&desc, &model);

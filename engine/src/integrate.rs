@@ -8,7 +8,9 @@
 //! 2. `τ = sat(τ_actuator) + τ_passive(q, v)` ([`crate::passive`]);
 //! 3. the caller's [`ForceModel`], which adds contact/push forces to `data.f_ext`
 //!    and generalised forces to `τ`;
-//! 4. [`aba_from_kinematics`] for `v̇`.
+//! 4. [`aba_from_kinematics`] for `v̇`, or, when the workspace carries
+//!    [`ImposedJoints`] (hybrid dynamics), [`hybrid_acceleration`]: the joint
+//!    accelerations are imposed and the base's follows from the dynamics.
 //!
 //! So every state-dependent force is re-evaluated at every RK4 stage, and the
 //! method keeps its order with stiff contacts as long as they are smooth.
@@ -18,10 +20,13 @@
 //! in the base frame; joints `q̇ = v`.
 
 use crate::aba::aba_from_kinematics;
+use crate::crba::crba_from_kinematics;
 use crate::data::Data;
 use crate::kinematics::forward_kinematics;
+use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
 use crate::model::Model;
 use crate::passive::{PassiveParams, add_passive_torques, saturate};
+use crate::rnea::rnea_from_kinematics;
 use glam::{DQuat, DVec3};
 
 /// Fixed-step integrator.
@@ -172,6 +177,68 @@ pub struct StepWorkspace {
     dq: [Vec<f64>; 4],
     /// Accelerations of the four stages (4 × nv).
     dv: [Vec<f64>; 4],
+    /// Hybrid dynamics: when set, the joints follow this motion and the
+    /// actuator torques are its output, not an input (see [`ImposedJoints`]).
+    pub imposed: Option<ImposedJoints>,
+}
+
+/// A joint motion imposed on the integrator (*hybrid dynamics*, Featherstone
+/// 2008 §9.2 in its simplest form): the joints' accelerations are given, the
+/// floating base is free under gravity and the external (contact) forces, and
+/// the joint torques that realise the motion are computed.
+///
+/// At each derivative evaluation, `s` seconds after the step's start (0 for
+/// semi-implicit Euler; 0, dt/2, dt/2, dt for RK4), the reference is the
+/// third-order expansion `q_r(s) = q_r + s q̇_r + s²/2 q̈_r + s³/6 q⃛_r` (and
+/// its derivatives), and the imposed joint acceleration is
+/// `a_j = q̈_r(s) + kp (q_r(s) − q_j) + kd (q̇_r(s) − q̇_j)`. The PD term (on
+/// acceleration, gains in 1/s² and 1/s) only removes the integrator's drift
+/// from the reference. The caller refreshes the reference every step.
+/// Without the jerk term a step's end would miss the next step's reference
+/// by `q⃛ dt³/6`, a first-order lag `q⃛ dt / (2 kp)` even under RK4.
+///
+/// Given `a_j`, the rows of `M a + h = τ + Jᵀf` split into base rows
+/// `M_bb a_b = τ_b − (M_bj a_j + h_b − (Jᵀf)_b)` (6×6, solved by Cholesky;
+/// `τ_b` the known generalised force on the base, normally 0) and joint rows
+/// `τ_j = M_jb a_b + M_jj a_j + h_j − (Jᵀf)_j`, computed with one RNEA with
+/// external forces (`r = RNEA(q, v, [0; a_j], f_ext)`) and the mass matrix's
+/// joint–base block (CRBA). The actuator torque is `τ_j` minus the known
+/// joint forces (passive and force-model torques); it is **not** saturated:
+/// a prescribed motion gets whatever torque it needs (a motion drive, as in
+/// a multibody package).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImposedJoints {
+    /// Reference joint angles at the step's start (rad, joints only).
+    pub q_rad: Vec<f64>,
+    /// Reference joint velocities (rad/s).
+    pub qd_radps: Vec<f64>,
+    /// Reference joint accelerations (rad/s²).
+    pub qdd_radps2: Vec<f64>,
+    /// Reference joint jerks (rad/s³).
+    pub qddd_radps3: Vec<f64>,
+    /// Stiffness of the drift correction (1/s²).
+    pub kp_per_s2: f64,
+    /// Damping of the drift correction (1/s).
+    pub kd_per_s: f64,
+    /// Output: the actuator torques (N·m, joints only) of the first
+    /// derivative evaluation of the last step (the step's start state).
+    pub tau_actuator_nm: Vec<f64>,
+}
+
+impl ImposedJoints {
+    /// A motion holding `q_rad` (joints only) with the given correction gains.
+    pub fn hold(q_rad: Vec<f64>, kp_per_s2: f64, kd_per_s: f64) -> ImposedJoints {
+        let n = q_rad.len();
+        ImposedJoints {
+            q_rad,
+            qd_radps: vec![0.0; n],
+            qdd_radps2: vec![0.0; n],
+            qddd_radps3: vec![0.0; n],
+            kp_per_s2,
+            kd_per_s,
+            tau_actuator_nm: vec![0.0; n],
+        }
+    }
 }
 
 impl StepWorkspace {
@@ -187,6 +254,7 @@ impl StepWorkspace {
             v_stage: vec![0.0; nv],
             dq: std::array::from_fn(|_| vec![0.0; nq]),
             dv: std::array::from_fn(|_| vec![0.0; nv]),
+            imposed: None,
         }
     }
 
@@ -232,6 +300,7 @@ pub fn step<F: ForceModel>(
                 tau,
                 q_stage,
                 dv,
+                imposed,
                 ..
             } = ws;
             let [a, ..] = dv;
@@ -245,6 +314,7 @@ pub fn step<F: ForceModel>(
                 forces,
                 tau,
                 a,
+                imposed.as_mut().map(|m| (m, 0.0)),
             );
             for (vi, ai) in state.v.iter_mut().zip(a.iter()) {
                 *vi += dt_s * ai;
@@ -274,6 +344,7 @@ fn rk4<F: ForceModel>(
         v_stage,
         dq,
         dv,
+        imposed,
     } = ws;
     // Stage k is evaluated at y0 + c_k·dt·k_{k−1}, c = (0, ½, ½, 1).
     let c = [0.0, 0.5 * dt_s, 0.5 * dt_s, dt_s];
@@ -304,6 +375,7 @@ fn rk4<F: ForceModel>(
             forces,
             tau,
             &mut dv[k],
+            imposed.as_mut().map(|m| (m, c[k])),
         );
     }
     let w = dt_s / 6.0;
@@ -317,8 +389,14 @@ fn rk4<F: ForceModel>(
     normalize_base_quat(model, &mut state.q);
 }
 
-/// One derivative evaluation: `a = ABA(q, v, sat(τ_act) + τ_passive + τ_forces, f_ext)`.
-/// `q` must hold a unit quaternion.
+/// One derivative evaluation: `a = ABA(q, v, sat(τ_act) + τ_passive + τ_forces, f_ext)`,
+/// or with an imposed joint motion (at `s` seconds into the step) the hybrid
+/// dynamics of [`hybrid_acceleration`] (`tau` then holds the total force that
+/// realises it). `q` must hold a unit quaternion.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one derivative evaluation reads every buffer of the step"
+)]
 fn acceleration<F: ForceModel>(
     model: &Model,
     data: &mut Data,
@@ -329,14 +407,97 @@ fn acceleration<F: ForceModel>(
     forces: &mut F,
     tau: &mut [f64],
     a_out: &mut [f64],
+    imposed: Option<(&mut ImposedJoints, f64)>,
 ) {
     forward_kinematics(model, data, q, v);
     data.clear_external_forces();
     tau.copy_from_slice(tau_actuator);
     add_passive_torques(model, passive, q, v, tau);
     forces.apply(model, data, q, v, tau);
-    aba_from_kinematics(model, data, v, tau, true);
-    a_out.copy_from_slice(&data.ddq);
+    match imposed {
+        None => {
+            aba_from_kinematics(model, data, v, tau, true);
+            a_out.copy_from_slice(&data.ddq);
+        }
+        Some((m, s)) => {
+            let (nq0, nv0) = (model.base_nq(), model.base_nv());
+            for j in 0..model.nv - nv0 {
+                let (jerk, s2) = (m.qddd_radps3[j], 0.5 * s * s);
+                let q_r =
+                    m.q_rad[j] + s * m.qd_radps[j] + s2 * m.qdd_radps2[j] + s2 * s / 3.0 * jerk;
+                let qd_r = m.qd_radps[j] + s * m.qdd_radps2[j] + s2 * jerk;
+                a_out[nv0 + j] = m.qdd_radps2[j]
+                    + s * jerk
+                    + m.kp_per_s2 * (q_r - q[nq0 + j])
+                    + m.kd_per_s * (qd_r - v[nv0 + j]);
+            }
+            // At the step's start state (Euler; RK4's first stage) record the
+            // actuator torque: the total joint force minus the passive and
+            // force-model parts (`tau − τ_act,in` before the solve).
+            let record = s == 0.0;
+            if record {
+                for (j, t) in m.tau_actuator_nm.iter_mut().enumerate() {
+                    *t = tau[nv0 + j] - tau_actuator[nv0 + j];
+                }
+            }
+            hybrid_acceleration(model, data, v, tau, a_out);
+            if record {
+                for (j, t) in m.tau_actuator_nm.iter_mut().enumerate() {
+                    *t = tau[nv0 + j] - *t;
+                }
+            }
+        }
+    }
+}
+
+/// Hybrid dynamics after [`forward_kinematics`] at `(q, v)` with the external
+/// forces in `data.f_ext`: given the joint rows of `a` (nv; the base rows are
+/// outputs) and the known generalised forces `tau` (nv), solves the base
+/// rows of `M a + h = τ + Jᵀ f_ext` for the base acceleration and writes into
+/// the joint rows of `tau` the total joint force that realises `a` (see
+/// [`ImposedJoints`]). Fills `data.mass_matrix`; leaves `data.tau` with
+/// `RNEA(q, v, [0; a_j], f_ext)`.
+///
+/// # Panics
+/// When the base's composite inertia is not positive definite (a massless
+/// robot).
+pub fn hybrid_acceleration(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    tau: &mut [f64],
+    a: &mut [f64],
+) {
+    let (nv, nv0) = (model.nv, model.base_nv());
+    a[..nv0].fill(0.0);
+    rnea_from_kinematics(model, data, v, a, true);
+    if nv0 == 6 {
+        crba_from_kinematics(model, data);
+        let mm = &data.mass_matrix;
+        let mut mbb = [[0.0; 6]; 6];
+        let mut rhs = [0.0; 6];
+        for k in 0..6 {
+            for l in 0..6 {
+                mbb[k][l] = mm[k * nv + l];
+            }
+            rhs[k] = tau[k] - data.tau[k];
+        }
+        assert!(
+            cholesky_in_place(&mut mbb),
+            "hybrid dynamics: the base's composite inertia is singular"
+        );
+        cholesky_solve_in_place(&mbb, &mut rhs);
+        a[..6].copy_from_slice(&rhs);
+        for j in 6..nv {
+            let mut t = data.tau[j];
+            for k in 0..6 {
+                t += mm[j * nv + k] * rhs[k];
+            }
+            tau[j] = t;
+        }
+    } else {
+        tau[nv0..].copy_from_slice(&data.tau[nv0..]);
+    }
 }
 
 /// Time derivative of the configuration in embedded coordinates (nq):

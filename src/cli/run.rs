@@ -503,8 +503,11 @@ pub const SPEED_TRACKING_FRACTION: f64 = 0.9;
 /// Smallest forward command whose tracking is judged (m/s).
 pub const TRACKED_COMMAND_MIN_MPS: f64 = 0.05;
 
-/// A robot's summary entry: its metrics, total mass, actuator load and load
-/// verdict (definitions in scenarios/README.md, "Metrics").
+/// One robot's object in `summary.json` and in the log's `metrics` message:
+/// its metrics, total mass, actuator load and load verdict (definitions in
+/// scenarios/README.md, "Metrics"), plus `study_b` (Study B's Table 4 torque
+/// comparison) for a robot run by the `prescribed` controller in hybrid mode
+/// on quad12.
 pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
     let m = r.run.metrics.summary();
     let mut v = metrics_json(name, &m);
@@ -553,6 +556,27 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
         "load".into(),
         json!({"carried": reason.is_none(), "reason": reason}),
     );
+    if let quadsim_components::Controller::Prescribed(p) = &r.run.controller
+        && let Some(c) = &p.study_b
+        && c.sim_hip.samples > 0
+    {
+        let joint = |m: &quadsim_engine::legs::study_b_dynamics::TorqueStats,
+                     s: &quadsim_engine::legs::study_b_dynamics::TorqueStats| {
+            json!({
+                "model_peak_nm": m.peak_nm,
+                "model_mean_nm": m.mean_abs_nm,
+                "sim_peak_nm": s.peak_nm,
+                "sim_mean_nm": s.mean_abs_nm,
+                "peak_ratio_sim_to_model": s.peak_nm / m.peak_nm,
+                "mean_ratio_sim_to_model": s.mean_abs_nm / m.mean_abs_nm,
+            })
+        };
+        v["study_b"] = json!({
+            "hip_tau2": joint(&c.model_hip, &c.sim_hip),
+            "knee_tau3": joint(&c.model_knee, &c.sim_knee),
+            "samples": c.sim_hip.samples,
+        });
+    }
     v
 }
 

@@ -174,6 +174,15 @@ impl Schema {
                     "steps": {"type": "integer"},
                     "min_stability_margin_m": {"type": ["number", "null"]},
                     "distance_m": {"type": "number"},
+                    "study_b": {
+                        "type": "object",
+                        "description": "Study B's Table 4 comparison (prescribed controller, hybrid mode, quad12 only): per joint the peak and mean |torque| (N m) of the fixed-base Lagrangian leg model on the prescribed trajectory and of the simulation, and their ratios",
+                        "properties": {
+                            "hip_tau2": study_b_joint(),
+                            "knee_tau3": study_b_joint(),
+                            "samples": {"type": "integer"},
+                        },
+                    },
                 }),
             ),
             Schema::FrameTransforms => object(
@@ -281,6 +290,21 @@ impl Schema {
         v["title"] = json!(self.name());
         v
     }
+}
+
+/// One joint of the `study_b` block of [`Schema::RobotMetrics`].
+fn study_b_joint() -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "model_peak_nm": {"type": "number"},
+            "model_mean_nm": {"type": "number"},
+            "sim_peak_nm": {"type": "number"},
+            "sim_mean_nm": {"type": "number"},
+            "peak_ratio_sim_to_model": {"type": "number"},
+            "mean_ratio_sim_to_model": {"type": "number"},
+        },
+    })
 }
 
 fn object(description: &str, properties: Value) -> Value {

@@ -125,6 +125,22 @@ pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
             ("position_clip_m", Domain::Positive, false),
         ],
     ),
+    (
+        "prescribed",
+        &[
+            ("mode", Domain::Text, false),
+            ("period_s", Domain::Positive, false),
+            ("duty_factor", Domain::Positive, false),
+            ("step_length_m", Domain::NonNegative, false),
+            ("lift_height_m", Domain::NonNegative, false),
+            ("body_height_m", Domain::Positive, false),
+            ("ramp_s", Domain::NonNegative, false),
+            ("hybrid_kp_per_s2", Domain::NonNegative, false),
+            ("hybrid_kd_per_s", Domain::NonNegative, false),
+            ("kp_nm_per_rad", Domain::Gains, false),
+            ("kd_nms_per_rad", Domain::Gains, false),
+        ],
+    ),
 ];
 
 /// Keys of each event kind beside `t_s`, `robot`, `kind`.

@@ -1,11 +1,14 @@
 //! The `Control` stage: each robot's controller writes its actuator command at
 //! the controller rate ([`ControlRate`]); the command is held in between.
+//! The `prescribed` controller in hybrid mode refreshes its imposed joint
+//! motion every step (the integrator follows it exactly).
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{
     ControlRate, Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
 };
 use quadsim_engine::contact::evaluate;
+use quadsim_engine::control::prescribed::PrescribedMode;
 use quadsim_engine::control::walker::WalkerInput;
 use quadsim_engine::kinematics::forward_kinematics;
 
@@ -17,13 +20,58 @@ pub fn run_controllers(
     rate: Res<ControlRate>,
     config: Res<SimConfig>,
 ) {
-    if !clock.step.is_multiple_of(rate.every_steps.max(1)) {
-        return;
-    }
+    let tick = clock.step.is_multiple_of(rate.every_steps.max(1));
     let sims = &mut batch.sims;
     let dt = clock_dt(&rate, &config);
     let t = clock.time_s;
-    pool.for_each(sims, |sim| control_robot_at(sim, t, dt));
+    pool.for_each(sims, |sim| {
+        if matches!(sim.run.controller, Controller::Prescribed(_)) {
+            prescribe(sim, t, tick);
+        } else if tick {
+            control_robot_at(sim, t, dt);
+        }
+    });
+}
+
+/// The `prescribed` controller at time `t_s` (every step). Hybrid mode: the
+/// reference moves to `t_s` and is handed to the integrator (which reports
+/// the torques; the `Integrate` stage samples Study B's comparison). PD
+/// mode: on controller ticks, the reference at `t_s` and PD torques.
+pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
+    let RobotSim {
+        model,
+        state,
+        tau_actuator,
+        workspace,
+        run,
+        ..
+    } = sim;
+    let Controller::Prescribed(p) = &mut run.controller else {
+        return;
+    };
+    let nv0 = model.base_nv();
+    let nq0 = model.base_nq();
+    match p.controller.params.mode {
+        PrescribedMode::Hybrid => {
+            p.controller.update_reference(model, t_s);
+            let imposed = workspace
+                .imposed
+                .get_or_insert_with(|| p.controller.imposed());
+            p.controller.write_imposed(imposed);
+        }
+        PrescribedMode::Pd => {
+            if tick {
+                p.controller.update_reference(model, t_s);
+                tau_actuator[..nv0].fill(0.0);
+                p.controller.pd_torques(
+                    model,
+                    &state.q[nq0..],
+                    &state.v[nv0..],
+                    &mut tau_actuator[nv0..],
+                );
+            }
+        }
+    }
 }
 
 fn clock_dt(rate: &ControlRate, config: &SimConfig) -> f64 {
@@ -97,7 +145,9 @@ pub fn control_robot(sim: &mut RobotSim) {
     let nb = sim.model.base_nv();
     let (nq0, nv0) = (sim.model.base_nq(), nb);
     match &sim.run.controller {
-        Controller::None | Controller::Walker(_) => sim.tau_actuator.fill(0.0),
+        Controller::None | Controller::Walker(_) | Controller::Prescribed(_) => {
+            sim.tau_actuator.fill(0.0)
+        }
         Controller::JointPd(pd) => {
             sim.tau_actuator[..nb].fill(0.0);
             pd.compute(

@@ -1,7 +1,7 @@
 //! Time integration of every robot, in parallel, and the clock.
 
 use bevy_ecs::prelude::*;
-use quadsim_components::{RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool};
+use quadsim_components::{Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool};
 use quadsim_engine::integrate::{self, Integrator};
 
 /// Advances every compiled robot by one `dt` on the world's thread pool.
@@ -30,6 +30,7 @@ pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
         workspace,
         contact,
         last_worker,
+        run,
         ..
     } = sim;
     integrate::step(
@@ -42,6 +43,15 @@ pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
         integrator,
         contact,
     );
+    // Hybrid dynamics: the torques that realised the imposed joint motion
+    // (at the step's start state) are what the actuators applied.
+    if let Some(m) = &workspace.imposed {
+        let nv0 = model.base_nv();
+        tau_actuator[nv0..].copy_from_slice(&m.tau_actuator_nm);
+        if let Controller::Prescribed(p) = &mut run.controller {
+            p.record_step(model, &tau_actuator[nv0..]);
+        }
+    }
     *last_worker = rayon::current_thread_index();
 }
 

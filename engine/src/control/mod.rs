@@ -5,5 +5,6 @@
 pub mod active_set;
 pub mod force_qp;
 pub mod joint_pd;
+pub mod prescribed;
 pub mod vmc;
 pub mod walker;

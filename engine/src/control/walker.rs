@@ -110,6 +110,12 @@ pub struct WalkerParams {
     /// Smallest knee bend (rad) a stance leg is held to, on the IK branch
     /// (≤ 0: no guard). See `Walker::guard_knee`.
     pub knee_guard_rad: f64,
+    /// Per leg, the point (m, base frame) whose ground projection is the
+    /// "hip" of Raibert's foot placement; empty: each leg's mount (the first
+    /// joint's origin: quad16's hips). quad12's mount is its hip-yaw axis,
+    /// which its foot cannot reach (the leg's 50 mm offset l1 keeps the foot
+    /// at least that far from it): there it is the stance foot's position.
+    pub placement_hips_m: Vec<DVec3>,
 }
 
 impl WalkerParams {
@@ -130,8 +136,17 @@ impl WalkerParams {
     /// falls within 2–5 s. Lifts of 8–14 cm hold in place and at 0.5 m/s;
     /// 17 cm falls (swing torques at the 100 N·m limit).
     ///
-    /// quad12 stands under these defaults but does not trot: it sinks in the
-    /// first diagonal support with its joints at the 3 N·m effort limit.
+    /// quad12 (12 kg, legs 10 kg of it): the gains scaled by 12/28, height
+    /// target 0.119 m, lift 1.2 cm, and Raibert's hips at the stance feet
+    /// ([`WalkerParams::placement_hips_m`]; at the hip-yaw axes the feet were
+    /// placed where the leg cannot reach and it fell within 2 s even at
+    /// 10 N·m). It then trots in place (symmetric: no tilt) and at 0.05 and
+    /// 0.1 m/s for 10 s (tilt ≤ 0.08 rad; 0.15 m/s only at 10 N·m, 0.2 m/s
+    /// falls) **if the effort limit is raised** to 6 N·m or more
+    /// (`engine/tests/quad12_vmc.rs` uses 8): in two-foot
+    /// support each stance hip pitch needs 3.85 N·m to hold the body (59 N
+    /// on a foot 87 mm out, less the leg's own weight), more than quad12's
+    /// default 3 N·m; at 3, 4 and 5 N·m it sinks and falls within 2–10 s.
     pub fn default_for(desc: &RobotDescription, model: &Model) -> WalkerParams {
         let nj = model.nv - model.base_nv();
         let stance = crate::robots::nominal_stance(&desc.name)
@@ -185,8 +200,31 @@ impl WalkerParams {
             stance_needs_contact: false,
             swing_in_level_frame: true,
             knee_guard_rad: 0.5,
+            placement_hips_m: placement_hips(desc, model, &stance),
         }
     }
+}
+
+/// quad12's placement hips ([`WalkerParams::placement_hips_m`]): each foot's
+/// contact point at the nominal stance (87 mm out along the leg from the hip
+/// pitch axis, 50 mm across it), at the mount's height. Empty for other
+/// robots (their mounts are their hips).
+fn placement_hips(desc: &RobotDescription, model: &Model, stance: &[f64]) -> Vec<DVec3> {
+    if desc.name != crate::robots::quad12::NAME {
+        return Vec::new();
+    }
+    let Ok(legs) = LegKinematics::for_robot(desc, model, FootPoint::Contact) else {
+        return Vec::new();
+    };
+    let nq0 = model.base_nq();
+    legs.iter()
+        .map(|leg| {
+            let a: Vec<f64> = leg.q_indices().iter().map(|&i| stance[i - nq0]).collect();
+            let mut p = leg.fk(&a);
+            p.z = leg.mount().trans.z;
+            p
+        })
+        .collect()
 }
 
 /// quad16's total mass (kg), the reference of [`WalkerParams::default_for`]'s
@@ -494,7 +532,12 @@ impl Walker {
             if self.scheduler.leg(i).phase != LegPhase::Swing {
                 continue;
             }
-            let hip_body = self.legs[i].mount().trans;
+            let hip_body = self
+                .params
+                .placement_hips_m
+                .get(i)
+                .copied()
+                .unwrap_or_else(|| self.legs[i].mount().trans);
             let hip_world = base.transform_point(hip_body);
             let hip_h = (heading.transpose() * (hip_world - com)).truncate();
             let placement = raibert_offset(

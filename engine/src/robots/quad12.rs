@@ -73,11 +73,14 @@
 //! 0.19 s per 60°, i.e. 5.5 rad/s). With the study's own mass table the robot
 //! weighs 12 kg: a standing leg carries about 29 N, so 0.3 N·m would allow a
 //! lever of 10 mm only, and the nominal stance below needs about 1.4 N·m at
-//! the hip pitch (2.7 N·m when two feet carry the robot in a trot). The default
-//! torque limit, 3 N·m, is that of the high-torque hobby-servo class (30–35
-//! kg·cm digital servos), enough for the stance under a trot's two-foot
-//! support; the speed limit, 6 rad/s (0.17 s per 60°), is the same class's
-//! speed at 6 V.
+//! the hip pitch. The default torque limit, 3 N·m, is that of the high-torque
+//! hobby-servo class (30–35 kg·cm digital servos). It is **not** enough for a
+//! trot's two-foot support: each stance foot then carries about 59 N, 87 mm
+//! out from the hip pitch axis, and the hip pitch needs 3.85 N·m (measured
+//! under the VMC walker; `docs/study_b_trot.md`), so walking scenarios raise
+//! it (6–10 N·m for VMC, 20 N·m in `scenarios/small_trot.toml` so that the
+//! prescribed trot's foot-strike peaks show unclipped). The speed limit,
+//! 6 rad/s (0.17 s per 60°), is the same class's speed at 6 V.
 
 use super::box_torso;
 use super::params::{Domain, ParamSpec, Values};
