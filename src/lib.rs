@@ -10,6 +10,7 @@ pub mod error;
 pub mod heightmap;
 pub mod log;
 pub mod model_source;
+pub mod report;
 pub mod scenario;
 pub mod terrain_spec;
 pub mod urdf;

@@ -3,7 +3,9 @@
 //! message (accumulated at full rate in the simulation, which a decimated log
 //! could not recompute), the rest from the log's metadata records
 //! (`scenario`, `quadsim`, `run`). Everything but `timing` (wall-clock, never
-//! logged) equals the original.
+//! logged) equals the original. Then `report.md` and the plots, from the
+//! same summary and the log's per-step channels, exactly as `quadsim run`
+//! writes them.
 
 use std::path::PathBuf;
 
@@ -20,7 +22,7 @@ use crate::log::read::{LogContents, read_log};
 pub struct ReportArgs {
     /// The log (`log.mcap` of a run).
     pub log: PathBuf,
-    /// Output directory (default: `report/` beside the log).
+    /// Output directory for `summary.json`, `report.md` and `plots/` (default: `report/` beside the log).
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -50,6 +52,27 @@ pub fn run(a: ReportArgs) -> Result<(), CliError> {
         source: e,
     })?;
     println!("wrote {}", path.display());
+    let text = contents.meta("scenario", "text").ok_or_else(|| {
+        bad(format!(
+            "{}: the log has no metadata 'scenario.text'",
+            a.log.display()
+        ))
+    })?;
+    let files = crate::report::write_report(
+        &crate::report::ReportInput {
+            summary: &summary,
+            scenario_text: text,
+            log: Some(&contents),
+        },
+        &out,
+    )
+    .map_err(crate::cli::run::report_error)?;
+    println!(
+        "wrote {} ({} plot files in {})",
+        files.markdown.display(),
+        files.plots.len(),
+        out.join(crate::report::PLOTS_DIR).display()
+    );
     Ok(())
 }
 

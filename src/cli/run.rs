@@ -43,6 +43,9 @@ pub struct RunArgs {
     /// overriding `world.log_rate_hz` (default: the controller rate).
     #[arg(long, value_name = "HZ|full")]
     pub log_rate: Option<String>,
+    /// Write no `report.md` and `plots/` (for batch runs).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// Arguments of `quadsim check`.
@@ -183,6 +186,8 @@ pub struct RunOutput {
     pub interrupted: bool,
     /// What the log writer did (`None` with `--no-log`).
     pub log: Option<crate::log::WriterStats>,
+    /// The report written (`None` with `--no-report`).
+    pub report: Option<crate::report::ReportFiles>,
 }
 
 /// Steps between log samples: `--log-rate`, else `world.log_rate_hz`, else the controller rate.
@@ -222,6 +227,14 @@ pub fn run(a: RunArgs) -> Result<(), CliError> {
     if !a.quiet {
         print_table(&out.summary);
         println!("wrote {}", out.out_dir.join("summary.json").display());
+        if let Some(r) = &out.report {
+            println!(
+                "wrote {} ({} plot files in {})",
+                r.markdown.display(),
+                r.plots.len(),
+                out.out_dir.join(crate::report::PLOTS_DIR).display()
+            );
+        }
         if let Some(l) = &out.log {
             println!(
                 "wrote {} ({} messages, {:.1} MB; log writer thread: {:.3} s CPU)",
@@ -327,12 +340,62 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         path: path.display().to_string(),
         source: e,
     })?;
+    let report = if a.no_report {
+        None
+    } else {
+        Some(write_run_report(
+            &scn,
+            &summary,
+            &out_dir,
+            log_stats.is_some(),
+        )?)
+    };
     Ok(RunOutput {
         summary,
         out_dir,
         interrupted: outcome.interrupted,
         log: log_stats,
+        report,
     })
+}
+
+/// `report.md` and the plots of a finished run, from its log read back (the
+/// same input `quadsim report` has, so both write the same files).
+fn write_run_report(
+    scn: &Scenario,
+    summary: &Value,
+    out_dir: &Path,
+    logged: bool,
+) -> Result<crate::report::ReportFiles, CliError> {
+    let contents = if logged {
+        Some(
+            crate::log::read::read_log(&out_dir.join(crate::log::LOG_FILE))
+                .map_err(|e| bad(e.to_string()))?,
+        )
+    } else {
+        None
+    };
+    let mut summary = summary.clone();
+    if let Some(o) = summary.as_object_mut() {
+        o.remove("timing");
+    }
+    crate::report::write_report(
+        &crate::report::ReportInput {
+            summary: &summary,
+            scenario_text: &scn.source,
+            log: contents.as_ref(),
+        },
+        out_dir,
+    )
+    .map_err(report_error)
+}
+
+/// A report that could not be written is an I/O failure on the named file.
+pub fn report_error(e: crate::report::ReportError) -> CliError {
+    CliError::Io {
+        path: e.path,
+        source: std::io::Error::other(e.message),
+    }
 }
 
 /// Stops with an error naming the robot, time and quantity when a state is
@@ -412,8 +475,32 @@ fn opt(x: Option<f64>) -> Value {
     x.map_or(Value::Null, |v| json!(v))
 }
 
-/// One robot's metrics as JSON (the keys of `scenarios/README.md`).
-pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
+/// The actuated joints' names, in the order of the joint arrays.
+pub fn joint_names(model: &quadsim_engine::Model) -> Vec<String> {
+    (model.base_nv()..model.nv)
+        .map(|vi| model.joint_name[model.v_body[vi]].clone())
+        .collect()
+}
+
+/// A robot's metrics as JSON, with its joints named from its model.
+pub fn robot_metrics_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
+    metrics_json(name, &joint_names(&r.model), &r.run.metrics.summary())
+}
+
+/// One robot's metrics as JSON (the keys of `scenarios/README.md`);
+/// `joint_names` name the per-joint arrays' entries.
+pub fn metrics_json(name: &str, joint_names: &[String], m: &MetricsSummary) -> Value {
+    let joints: Vec<Value> = joint_names
+        .iter()
+        .enumerate()
+        .map(|(j, n)| {
+            json!({
+                "name": n,
+                "peak_abs_torque_nm": m.joint_peak_abs_torque_nm.get(j).copied().unwrap_or(0.0),
+                "mean_abs_torque_nm": m.joint_mean_abs_torque_nm.get(j).copied().unwrap_or(0.0),
+            })
+        })
+        .collect();
     json!({
         "name": name,
         "fell": m.fell,
@@ -434,6 +521,10 @@ pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
         "steps": m.steps,
         "min_stability_margin_m": opt(m.min_stability_margin_m),
         "distance_m": m.distance_m,
+        "com_displacement_m": m.com_displacement_m,
+        "com_mean_velocity_mps": m.com_mean_velocity_mps,
+        "com_oscillation_m": m.com_oscillation_m,
+        "joints": joints,
     })
 }
 
@@ -443,12 +534,7 @@ pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: us
     let robots: Vec<Value> = world
         .robots
         .iter()
-        .filter_map(|(name, root)| {
-            world
-                .sim
-                .robot(*root)
-                .map(|r| metrics_json(name, &r.run.metrics.summary()))
-        })
+        .filter_map(|(name, root)| world.sim.robot(*root).map(|r| robot_metrics_json(name, r)))
         .collect();
     let sha = Sha256::digest(scn.source.as_bytes());
     let used_threads = world

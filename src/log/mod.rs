@@ -152,7 +152,7 @@ impl RunLog {
         let t_ns = step_time_ns(clock.step, world.dt_s);
         for (name, root) in &world.robots {
             if let Some(r) = world.sim.robot(*root) {
-                let m = crate::cli::run::metrics_json(name, &r.run.metrics.summary());
+                let m = crate::cli::run::robot_metrics_json(name, r);
                 self.log
                     .write_json(&metrics_topic(name), Schema::RobotMetrics, t_ns, &m);
             }

@@ -174,6 +174,19 @@ impl Schema {
                     "steps": {"type": "integer"},
                     "min_stability_margin_m": {"type": ["number", "null"]},
                     "distance_m": {"type": "number"},
+                    "com_displacement_m": {"type": "array", "items": {"type": "number"}, "description": "CoM displacement over the run (m), heading frame x, y, z"},
+                    "com_mean_velocity_mps": {"type": "array", "items": {"type": "number"}, "description": "com_displacement_m / duration (m/s)"},
+                    "com_oscillation_m": {"type": "array", "items": {"type": "number"}, "description": "CoM oscillation amplitude per axis (m): half peak-to-peak of y, z and of detrended x"},
+                    "joints": {
+                        "type": "array",
+                        "description": "Per actuated joint: peak and time-mean |torque| (N m)",
+                        "items": {"type": "object", "properties": {
+                            "name": {"type": "string"},
+                            "peak_abs_torque_nm": {"type": "number"},
+                            "mean_abs_torque_nm": {"type": "number"},
+                        }},
+                    },
+                    "push_recovery": {"type": "object", "description": "Optional: largest push impulse recovered from"},
                 }),
             ),
             Schema::FrameTransforms => object(
