@@ -369,8 +369,11 @@ fn write_run_report(
 ) -> Result<crate::report::ReportFiles, CliError> {
     let contents = if logged {
         Some(
-            crate::log::read::read_log(&out_dir.join(crate::log::LOG_FILE))
-                .map_err(|e| bad(e.to_string()))?,
+            crate::log::read::read_log_topics(
+                &out_dir.join(crate::log::LOG_FILE),
+                &crate::report::needs_topic,
+            )
+            .map_err(|e| bad(e.to_string()))?,
         )
     } else {
         None

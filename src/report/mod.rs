@@ -114,6 +114,13 @@ pub fn robot_info(scenario_text: &str, name: &str) -> RobotInfo {
     }
 }
 
+/// Whether the report needs a topic's messages (not the 3D scene and
+/// transforms, the largest part of a log): the filter for
+/// [`read_log_topics`](crate::log::read::read_log_topics).
+pub fn needs_topic(topic: &str) -> bool {
+    !matches!(topic, "/tf" | "/scene")
+}
+
 /// Writes `out_dir/report.md` and `out_dir/plots/<robot>_<plot>.{svg,png}`.
 pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFiles, ReportError> {
     let robots: Vec<String> = input.summary["robots"]
@@ -143,12 +150,35 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
                 speed_target: robot_info(input.scenario_text, name).speed_command,
                 end_s,
             };
-            let mut links = Vec::new();
-            for (caption, fig) in plots::robot_figures(&s, &ctx) {
-                let files = plots::write_figure(&fig, &plots_dir)?;
-                links.push((caption, fig.stem.clone()));
-                plot_files.extend(files);
+            let figs = plots::robot_figures(&s, &ctx);
+            // figures are independent files: draw them on a few threads
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(4));
+            let per = figs.len().div_ceil(threads).max(1);
+            let written: Vec<Result<[PathBuf; 2], ReportError>> = std::thread::scope(|sc| {
+                let handles: Vec<_> = figs
+                    .chunks(per)
+                    .map(|chunk| {
+                        let dir = &plots_dir;
+                        sc.spawn(move || {
+                            chunk
+                                .iter()
+                                .map(|(_, f)| plots::write_figure(f, dir))
+                                .collect::<Vec<_>>()
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .flat_map(|h| h.join().expect("plot thread"))
+                    .collect()
+            });
+            for w in written {
+                plot_files.extend(w?);
             }
+            let links = figs
+                .iter()
+                .map(|(caption, f)| (caption.clone(), f.stem.clone()))
+                .collect();
             figures.push((name.clone(), links));
         }
     }

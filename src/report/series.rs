@@ -2,8 +2,6 @@
 //! `/attitude`, `/joint_states`, `/joint_commands`, `/feet`), the material of
 //! the plots and of `quadsim replay`.
 
-use serde_json::Value;
-
 use crate::log::read::LogContents;
 
 /// One foot at one sample.
@@ -53,14 +51,62 @@ pub struct RobotSeries {
     pub feet: Vec<Vec<FootPoint>>,
 }
 
-fn v3(v: &Value) -> [f64; 3] {
-    let c = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-    [c("x"), c("y"), c("z")]
+/// The fields the series need, decoded straight into typed structs (much
+/// cheaper than a generic JSON tree; other fields are skipped).
+mod msg {
+    use serde::Deserialize;
+
+    #[derive(Deserialize)]
+    pub struct V3 {
+        pub x: Option<f64>,
+        pub y: Option<f64>,
+        pub z: Option<f64>,
+    }
+
+    impl V3 {
+        pub fn get(&self) -> [f64; 3] {
+            let f = |v: Option<f64>| v.unwrap_or(f64::NAN);
+            [f(self.x), f(self.y), f(self.z)]
+        }
+    }
+
+    #[derive(Deserialize)]
+    pub struct Com {
+        pub position: V3,
+        pub velocity: V3,
+    }
+
+    #[derive(Deserialize)]
+    pub struct Attitude {
+        pub roll: Option<f64>,
+        pub pitch: Option<f64>,
+        pub yaw: Option<f64>,
+    }
+
+    #[derive(Deserialize)]
+    pub struct Joints {
+        #[serde(default)]
+        pub name: Vec<String>,
+        pub position: Option<Vec<Option<f64>>>,
+        pub effort: Option<Vec<Option<f64>>>,
+    }
+
+    #[derive(Deserialize)]
+    pub struct Foot {
+        pub name: String,
+        pub in_contact: bool,
+        pub force: V3,
+        pub position: V3,
+    }
+
+    #[derive(Deserialize)]
+    pub struct Feet {
+        pub feet: Vec<Foot>,
+    }
 }
 
-fn nums(v: &Value) -> Option<Vec<f64>> {
-    v.as_array()
-        .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
+fn nums(v: Option<Vec<Option<f64>>>) -> Option<Vec<f64>> {
+    v.map(|a| a.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect())
 }
 
 impl RobotSeries {
@@ -71,23 +117,26 @@ impl RobotSeries {
             name: name.to_string(),
             ..Default::default()
         };
-        let decode = |topic: &str| -> Result<Vec<(f64, Value)>, String> {
+        fn decode<T: serde::de::DeserializeOwned>(
+            c: &LogContents,
+            topic: &str,
+        ) -> Result<Vec<(f64, T)>, String> {
             c.topic(topic)
                 .map(|m| {
-                    m.json()
+                    serde_json::from_slice(&m.data)
                         .map(|j| (m.t_s(), j))
-                        .map_err(|e| format!("{topic}: not JSON: {e}"))
+                        .map_err(|e| format!("{topic}: {e}"))
                 })
                 .collect()
-        };
-        for (t, j) in decode(&format!("/{name}/com"))? {
+        }
+        for (t, j) in decode::<msg::Com>(c, &format!("/{name}/com"))? {
             s.com_t_s.push(t);
-            s.com_m.push(v3(&j["position"]));
-            s.com_velocity_mps.push(v3(&j["velocity"]));
+            s.com_m.push(j.position.get());
+            s.com_velocity_mps.push(j.velocity.get());
         }
         let mut yaw_prev: Option<(f64, f64)> = None;
-        for (t, j) in decode(&format!("/{name}/attitude"))? {
-            let yaw = j["yaw"].as_f64().unwrap_or(f64::NAN);
+        for (t, j) in decode::<msg::Attitude>(c, &format!("/{name}/attitude"))? {
+            let yaw = j.yaw.unwrap_or(f64::NAN);
             let unwrapped = match yaw_prev {
                 None => yaw,
                 Some((raw, un)) => {
@@ -99,43 +148,35 @@ impl RobotSeries {
             yaw_prev = Some((yaw, unwrapped));
             s.attitude_t_s.push(t);
             s.rpy_rad.push([
-                j["roll"].as_f64().unwrap_or(f64::NAN),
-                j["pitch"].as_f64().unwrap_or(f64::NAN),
+                j.roll.unwrap_or(f64::NAN),
+                j.pitch.unwrap_or(f64::NAN),
                 unwrapped,
             ]);
         }
-        for (t, j) in decode(&format!("/{name}/joint_states"))? {
-            if s.joint_names.is_empty()
-                && let Some(a) = j["name"].as_array()
-            {
-                s.joint_names = a
-                    .iter()
-                    .map(|x| x.as_str().unwrap_or("?").to_string())
-                    .collect();
+        for (t, j) in decode::<msg::Joints>(c, &format!("/{name}/joint_states"))? {
+            if s.joint_names.is_empty() {
+                s.joint_names = j.name;
             }
             s.joint_t_s.push(t);
-            s.q_rad.push(nums(&j["position"]).unwrap_or_default());
-            s.tau_nm.push(nums(&j["effort"]).unwrap_or_default());
+            s.q_rad.push(nums(j.position).unwrap_or_default());
+            s.tau_nm.push(nums(j.effort).unwrap_or_default());
         }
-        for (t, j) in decode(&format!("/{name}/joint_commands"))? {
+        for (t, j) in decode::<msg::Joints>(c, &format!("/{name}/joint_commands"))? {
             s.command_t_s.push(t);
-            s.q_desired_rad.push(nums(&j["position"]));
+            s.q_desired_rad.push(nums(j.position));
         }
-        for (t, j) in decode(&format!("/{name}/feet"))? {
-            let feet = j["feet"].as_array().cloned().unwrap_or_default();
+        for (t, j) in decode::<msg::Feet>(c, &format!("/{name}/feet"))? {
             if s.foot_names.is_empty() {
-                s.foot_names = feet
-                    .iter()
-                    .map(|f| f["name"].as_str().unwrap_or("?").to_string())
-                    .collect();
+                s.foot_names = j.feet.iter().map(|f| f.name.clone()).collect();
             }
             s.feet_t_s.push(t);
             s.feet.push(
-                feet.iter()
+                j.feet
+                    .iter()
                     .map(|f| FootPoint {
-                        in_contact: f["in_contact"].as_bool().unwrap_or(false),
-                        force_n: v3(&f["force"]),
-                        position_m: v3(&f["position"]),
+                        in_contact: f.in_contact,
+                        force_n: f.force.get(),
+                        position_m: f.position.get(),
                     })
                     .collect(),
             );
