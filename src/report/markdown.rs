@@ -526,7 +526,7 @@ pub fn report_markdown(
 
     let _ = writeln!(
         out,
-        "## Studies side by side\n\nThe studies' reported figures (/work/shared/reference.md) beside this run's. They are what the studies printed, not targets to force; where this run's conditions differ (speed command, terrain, controller), the numbers are not like for like.\n"
+        "## Studies side by side\n\nThe studies' reported figures (as restated in the project's `shared/reference.md`) beside this run's. They are what the studies printed, not targets to force; where this run's conditions differ (speed command, terrain, controller), the numbers are not like for like.\n"
     );
     for (k, r) in robots.iter().enumerate() {
         let n = r["name"].as_str().unwrap_or("?");
