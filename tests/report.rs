@@ -229,3 +229,60 @@ gravity_compensation = "static"
         m * 1e3
     )));
 }
+
+/// Several robots: one set of plots per robot, named after it, a metrics
+/// column and a studies section each; a robot logged with `log = false` has
+/// its metrics but no plots.
+#[test]
+fn several_robots_get_plots_named_per_robot() {
+    let dir = tmp("grounds");
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/grounds.toml"
+    ))
+    .unwrap();
+    // the last robot is not logged
+    let pos = src.rfind("[[robots]]").unwrap();
+    let (a, b) = src.split_at(pos);
+    let edited = format!(
+        "{a}{}",
+        b.replacen("[[robots]]\n", "[[robots]]\nlog = false\n", 1)
+    );
+    let scn = dir.join("grounds.toml");
+    std::fs::write(&scn, edited).unwrap();
+    let out = dir.join("run");
+    quadsim(&[
+        "run",
+        s(&scn),
+        "--duration",
+        "0.1",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let summary = read_json(&out.join("summary.json"));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let names: Vec<&str> = summary["robots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names.len(), 4);
+    let header = report
+        .lines()
+        .find(|l| l.starts_with("| metric |"))
+        .unwrap();
+    for (k, n) in names.iter().enumerate() {
+        assert!(header.contains(n), "{header}");
+        assert!(report.contains(&format!("### `{n}` (quad16)")), "{n}");
+        let logged = k < 3;
+        for p in PLOTS {
+            assert_eq!(
+                out.join(format!("plots/{n}_{p}.png")).exists(),
+                logged,
+                "{n}_{p}"
+            );
+        }
+    }
+}

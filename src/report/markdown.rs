@@ -552,3 +552,71 @@ pub fn report_markdown(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn summary(robot: Value) -> Value {
+        json!({"scenario": "t", "seed": 1, "sim_time_s": 1.0, "steps": 2000, "dt_s": 0.0005,
+               "integrator": "semi_implicit_euler", "controller_rate_hz": 500.0,
+               "quadsim_version": "0", "git_commit": "x", "scenario_sha256": "ab",
+               "robots": [robot]})
+    }
+
+    const SCN: &str = "format_version = 1\n[[robots]]\nname = \"rex\"\nmodel = \"quad16\"\n";
+
+    #[test]
+    fn push_recovery_is_a_row_when_present_and_absent_otherwise() {
+        let with = summary(json!({"name": "rex", "energy_per_step_j": 12.0,
+            "push_recovery": {"max_impulse_ns": 15.0, "force_n": 150.0, "duration_s": 0.1}}));
+        let input = ReportInput {
+            summary: &with,
+            scenario_text: SCN,
+            log: None,
+        };
+        let md = report_markdown(&input, &[]);
+        assert!(
+            md.contains("| largest push recovered from (N·s) | 15.00 (150.0 N for 0.100 s) |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| largest push impulse recovered from (N·s) | —[^1-"),
+            "{md}"
+        );
+        assert!(md.contains("the study reports no push experiment"));
+        let without = summary(json!({"name": "rex", "energy_per_step_j": 12.0}));
+        let input = ReportInput {
+            summary: &without,
+            scenario_text: SCN,
+            log: None,
+        };
+        assert!(!report_markdown(&input, &[]).contains("push"));
+    }
+
+    #[test]
+    fn a_missing_value_is_a_dash_with_a_footnote_saying_why() {
+        let s =
+            summary(json!({"name": "rex", "joint_rms_error_rad": null, "energy_per_step_j": null}));
+        let input = ReportInput {
+            summary: &s,
+            scenario_text: SCN,
+            log: None,
+        };
+        let md = report_markdown(&input, &[]);
+        assert!(
+            md.contains("| joint tracking RMS (rad) | 0.05 | —[^1-1] |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| energy per step (J) | 50 | —[^1-2] |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("[^1-1]: the controller set no joint targets"),
+            "{md}"
+        );
+        assert!(md.contains("[^1-2]: no foot touched down"), "{md}");
+    }
+}
