@@ -335,9 +335,11 @@ fn study_b(out: &mut String, r: &Value, notes: &mut Notes) {
         v.filter(|x| x.is_finite())
             .map_or_else(|| notes.missing(no_joint), |x| format!("{x:.d$}"))
     };
-    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
-        (Some(a), Some(b)) if b > 0.0 => Some(a / b),
-        _ => None,
+    let zero = "undefined: the torque in the denominator is zero (no actuator torque was applied).";
+    let ratio = |a: Option<f64>, b: Option<f64>, notes: &mut Notes| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
+        (Some(_), Some(_)) => notes.missing(zero),
+        _ => notes.missing(no_joint),
     };
     let (hp, hm) = (hip.map(|h| h.0), hip.map(|h| h.1));
     let (kp, km) = (knee.map(|k| k.0), knee.map(|k| k.1));
@@ -365,22 +367,22 @@ fn study_b(out: &mut String, r: &Value, notes: &mut Notes) {
         vec![
             "knee / hip, peaks".into(),
             format!("{:.2}", 300.0 / 85.0),
-            val(ratio(kp, hp), 2, notes),
+            ratio(kp, hp, notes),
         ],
         vec![
             "knee / hip, means".into(),
             format!("{:.2}", 80.0 / 25.0),
-            val(ratio(km, hm), 2, notes),
+            ratio(km, hm, notes),
         ],
         vec![
             "hip peak / mean".into(),
             format!("{:.2}", 85.0 / 25.0),
-            val(ratio(hp, hm), 2, notes),
+            ratio(hp, hm, notes),
         ],
         vec![
             "knee peak / mean".into(),
             format!("{:.2}", 300.0 / 80.0),
-            val(ratio(kp, km), 2, notes),
+            ratio(kp, km, notes),
         ],
     ];
     let margin = r["min_stability_margin_m"].as_f64();
