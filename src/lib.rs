@@ -12,6 +12,7 @@ pub mod heightmap;
 pub mod log;
 pub mod mem;
 pub mod model_source;
+pub mod report;
 pub mod scenario;
 pub mod study;
 pub mod terrain_spec;

@@ -203,6 +203,13 @@ fn interrupt_with(sig: &str) {
     let mut expected = summary.clone();
     expected.as_object_mut().unwrap().remove("timing");
     assert_eq!(rebuilt, expected);
+    // report.md too, marked interrupted, and rebuilt identically from the log
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("**Interrupted**"), "{report}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("report/report.md")).unwrap(),
+        report
+    );
 }
 
 #[test]

@@ -255,7 +255,7 @@ fn channels_counts_schemas_and_values_match_the_simulation() {
     assert_eq!(c.meta("run", "steps"), Some("403"));
     assert_eq!(c.meta("run", "interrupted"), Some("false"));
     let metrics = last(&c, "/rex/metrics");
-    let expected = quadsim::cli::run::metrics_json("rex", &sim.run.metrics.summary());
+    let expected = quadsim::cli::run::robot_json("rex", sim);
     assert_eq!(metrics, expected);
 }
 

@@ -93,6 +93,20 @@ pub struct MetricsSummary {
     pub min_stability_margin_m: Option<f64>,
     /// Net horizontal displacement of the CoM over the window (m).
     pub distance_m: f64,
+    /// CoM displacement from the window's first to its last step (m), in the
+    /// heading frame: x along the start heading, y to its left, z up.
+    pub com_displacement_m: [f64; 3],
+    /// `com_displacement_m` divided by the window's duration (m/s): Study B's
+    /// "mean speed" per axis.
+    pub com_mean_velocity_mps: [f64; 3],
+    /// CoM oscillation amplitude per axis (m, heading frame): half the
+    /// peak-to-peak of y and of z, and of x after removing the mean-velocity
+    /// trend (x minus the straight line from its first to its last value).
+    pub com_oscillation_m: [f64; 3],
+    /// Largest |τ| per actuated joint (N·m, joint order of the model).
+    pub joint_peak_abs_torque_nm: Vec<f64>,
+    /// Time-mean of |τ| per actuated joint (N·m).
+    pub joint_mean_abs_torque_nm: Vec<f64>,
 }
 
 /// Accumulates [`MetricsSummary`] step by step, without allocating.
@@ -124,6 +138,76 @@ pub struct MetricsAccumulator {
     min_margin: Option<f64>,
     com_start: DVec3,
     com_end: DVec3,
+    /// CoM in the heading frame at the window start.
+    com_h0: DVec3,
+    /// CoM y and z in the heading frame, relative to the window start.
+    com_hy: Stat,
+    com_hz: Stat,
+    /// Upper and lower convex hulls of the points (t − t0, x_heading − x0): the
+    /// extremes of x minus any straight line lie on them (see [`Hulls`]).
+    x_hulls: Hulls,
+    tau_peak: Vec<f64>,
+    tau_abs_integral: Vec<f64>,
+}
+
+/// Upper and lower convex hulls of points arriving in increasing abscissa
+/// (Andrew's monotone chain, one stack each). The maximum (minimum) of
+/// `y − s·x` over all points, for any slope `s` known only at the end, is
+/// attained at a vertex of the upper (lower) hull. Amortised O(1) per point;
+/// the stacks are pre-sized so a trot (a few vertices per gait cycle) does not
+/// allocate in the step.
+#[derive(Clone, Debug)]
+struct Hulls {
+    upper: Vec<DVec2>,
+    lower: Vec<DVec2>,
+}
+
+impl Hulls {
+    const CAPACITY: usize = 4096;
+
+    fn new() -> Self {
+        Self {
+            upper: Vec::with_capacity(Self::CAPACITY),
+            lower: Vec::with_capacity(Self::CAPACITY),
+        }
+    }
+
+    fn push(&mut self, p: DVec2) {
+        let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
+        // upper hull: keep clockwise turns
+        while self.upper.len() >= 2
+            && cross(
+                self.upper[self.upper.len() - 2],
+                self.upper[self.upper.len() - 1],
+                p,
+            ) >= 0.0
+        {
+            self.upper.pop();
+        }
+        self.upper.push(p);
+        while self.lower.len() >= 2
+            && cross(
+                self.lower[self.lower.len() - 2],
+                self.lower[self.lower.len() - 1],
+                p,
+            ) <= 0.0
+        {
+            self.lower.pop();
+        }
+        self.lower.push(p);
+    }
+
+    /// max − min over all points of `y − slope·x`.
+    fn detrended_p2p(&self, slope: f64) -> f64 {
+        let f = |p: &DVec2| p.y - slope * p.x;
+        let hi = self.upper.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
+        let lo = self.lower.iter().map(f).fold(f64::INFINITY, f64::min);
+        if hi.is_finite() && lo.is_finite() {
+            hi - lo
+        } else {
+            0.0
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -192,7 +276,22 @@ impl MetricsAccumulator {
             min_margin: None,
             com_start: DVec3::ZERO,
             com_end: DVec3::ZERO,
+            com_h0: DVec3::ZERO,
+            com_hy: Stat::EMPTY,
+            com_hz: Stat::EMPTY,
+            x_hulls: Hulls::new(),
+            tau_peak: Vec::new(),
+            tau_abs_integral: Vec::new(),
         }
+    }
+
+    /// A world point in the heading frame (x along the start heading, y left, z up).
+    fn heading_frame(&self, p: DVec3) -> DVec3 {
+        DVec3::new(
+            p.truncate().dot(self.heading),
+            self.heading.perp_dot(p.truncate()),
+            p.z,
+        )
     }
 
     /// Adds one step.
@@ -226,11 +325,25 @@ impl MetricsAccumulator {
             self.started = true;
             self.t0 = s.t_s;
             self.com_start = s.com_m;
+            self.com_h0 = self.heading_frame(s.com_m);
         }
         self.touchdowns += touchdowns;
         self.t_last = s.t_s;
         self.time_s += s.dt_s;
         self.com_end = s.com_m;
+        let ch = self.heading_frame(s.com_m) - self.com_h0;
+        self.com_hy.add(ch.y, s.dt_s);
+        self.com_hz.add(ch.z, s.dt_s);
+        self.x_hulls.push(DVec2::new(s.t_s - self.t0, ch.x));
+        if self.tau_peak.len() != s.tau_joints.len() {
+            // only when the robot's joint count changes (first step, recompile)
+            self.tau_peak = vec![0.0; s.tau_joints.len()];
+            self.tau_abs_integral = vec![0.0; s.tau_joints.len()];
+        }
+        for (j, tau) in s.tau_joints.iter().enumerate() {
+            self.tau_peak[j] = self.tau_peak[j].max(tau.abs());
+            self.tau_abs_integral[j] += tau.abs() * s.dt_s;
+        }
         let v_fwd = s.com_velocity_mps.truncate().dot(self.heading);
         self.speed_integral += v_fwd * s.dt_s;
         self.peak_speed = self.peak_speed.max(v_fwd);
@@ -266,6 +379,13 @@ impl MetricsAccumulator {
     pub fn summary(&self) -> MetricsSummary {
         let t = self.time_s;
         let mean = |st: &Stat| if t > 0.0 { st.sum / t } else { 0.0 };
+        let disp = if self.started {
+            self.heading_frame(self.com_end) - self.com_h0
+        } else {
+            DVec3::ZERO
+        };
+        let span_s = self.t_last - self.t0;
+        let x_slope = if span_s > 0.0 { disp.x / span_s } else { 0.0 };
         MetricsSummary {
             fell: self.fell_at_s.is_some(),
             fell_at_s: self.fell_at_s,
@@ -293,6 +413,23 @@ impl MetricsAccumulator {
             steps: self.touchdowns,
             min_stability_margin_m: self.min_margin,
             distance_m: (self.com_end - self.com_start).truncate().length(),
+            com_displacement_m: disp.to_array(),
+            com_mean_velocity_mps: if t > 0.0 {
+                (disp / t).to_array()
+            } else {
+                [0.0; 3]
+            },
+            com_oscillation_m: [
+                0.5 * self.x_hulls.detrended_p2p(x_slope),
+                0.5 * self.com_hy.p2p(),
+                0.5 * self.com_hz.p2p(),
+            ],
+            joint_peak_abs_torque_nm: self.tau_peak.clone(),
+            joint_mean_abs_torque_nm: self
+                .tau_abs_integral
+                .iter()
+                .map(|i| if t > 0.0 { i / t } else { 0.0 })
+                .collect(),
         }
     }
 }
@@ -433,5 +570,65 @@ mod tests {
         let diag = (0.5f64 * 0.5 + 0.3 * 0.3).sqrt();
         let tri_margin = 0.015 / diag;
         assert!((s.min_stability_margin_m.unwrap() - tri_margin).abs() < 1e-12);
+    }
+
+    #[test]
+    fn oscillation_amplitudes_and_per_axis_speeds() {
+        // Heading 90° (world +y is forward). In the heading frame the CoM moves
+        // x = 0.1 t + 0.005 sin(4πt), y = 0.009 sin(2πt), z = 0.3 + 0.001 cos(4πt)
+        // for 5 s (whole periods): amplitudes 5, 9, 1 mm; mean speed 0.1 m/s forward.
+        let yaw = std::f64::consts::FRAC_PI_2;
+        let mut m = MetricsAccumulator::new(yaw, 0.0);
+        let dt = 0.0005;
+        let tau = std::f64::consts::TAU;
+        for k in 0..=10_000 {
+            let t = k as f64 * dt;
+            let (x, y) = (
+                0.1 * t + 0.005 * (2.0 * tau * t).sin(),
+                0.009 * (tau * t).sin(),
+            );
+            let z = 0.3 + 0.001 * (2.0 * tau * t).cos();
+            // heading frame → world: x along +y, y (left) along −x
+            let com = DVec3::new(-y, x, z);
+            m.record(&sample(t, dt, com, DVec3::ZERO, &[], &[], &[]));
+        }
+        let s = m.summary();
+        let o = s.com_oscillation_m;
+        assert!((o[0] - 0.005).abs() < 1e-6, "{o:?}");
+        assert!((o[1] - 0.009).abs() < 1e-6, "{o:?}");
+        assert!((o[2] - 0.001).abs() < 1e-6, "{o:?}");
+        let d = s.com_displacement_m;
+        assert!(
+            (d[0] - 0.5).abs() < 1e-9 && d[1].abs() < 1e-9 && d[2].abs() < 1e-9,
+            "{d:?}"
+        );
+        let v = s.com_mean_velocity_mps;
+        assert!((v[0] - 0.5 / (10_001.0 * dt)).abs() < 1e-12, "{v:?}");
+    }
+
+    #[test]
+    fn per_joint_peak_and_mean_torque() {
+        // τ0 = 2 sin(2πt), τ1 = −3 over one second: peak 2 and 3 N·m, mean |τ| 4/π and 3 N·m.
+        let mut m = MetricsAccumulator::new(0.0, 0.0);
+        let n = 100_000;
+        let dt = 1.0 / n as f64;
+        for k in 0..n {
+            let t = (k as f64 + 0.5) * dt;
+            let tau = [2.0 * (std::f64::consts::TAU * t).sin(), -3.0];
+            m.record(&sample(
+                t,
+                dt,
+                DVec3::Z,
+                DVec3::ZERO,
+                &[],
+                &tau,
+                &[0.0, 0.0],
+            ));
+        }
+        let s = m.summary();
+        assert!((s.joint_peak_abs_torque_nm[0] - 2.0).abs() < 1e-6);
+        assert_eq!(s.joint_peak_abs_torque_nm[1], 3.0);
+        assert!((s.joint_mean_abs_torque_nm[0] - 4.0 / std::f64::consts::PI).abs() < 1e-6);
+        assert!((s.joint_mean_abs_torque_nm[1] - 3.0).abs() < 1e-9);
     }
 }

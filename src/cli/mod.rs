@@ -6,6 +6,7 @@ pub mod bench;
 pub mod dynamics;
 pub mod export;
 pub mod models;
+pub mod replay;
 pub mod report;
 pub mod run;
 pub mod sweep;
@@ -23,7 +24,7 @@ pub struct Cli {
 /// quadsim's commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run a scenario: progress bar, metrics table, `DIR/summary.json`.
+    /// Run a scenario: progress bar, metrics table, `DIR/summary.json`, `log.mcap`, `report.md` and `plots/`.
     Run(run::RunArgs),
     /// Validate a scenario without running it (errors and stability warnings).
     Check(run::CheckArgs),
@@ -35,8 +36,10 @@ pub enum Command {
     Models(models::ModelsArgs),
     /// Terrain tools: `quadsim terrain export` samples a terrain into a heightmap file.
     Terrain(terrain::TerrainArgs),
-    /// Rebuild a run's summary.json from its log.mcap.
+    /// Rebuild a run's summary.json, report.md and plots from its log.mcap.
     Report(report::ReportArgs),
+    /// Play a log.mcap in the terminal: robot states and moving charts of chosen signals.
+    Replay(replay::ReplayArgs),
     /// Export a log.mcap as one CSV per channel (`--csv DIR`).
     Export(export::ExportArgs),
     /// Measure step throughput of herds by robot and thread count, and memory per robot.
@@ -57,6 +60,7 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Models(a) => models::run(a),
         Command::Terrain(a) => terrain::run(a),
         Command::Report(a) => report::run(a),
+        Command::Replay(a) => replay::run(a),
         Command::Export(a) => export::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Sweep(a) => sweep::sweep(a),

@@ -3,7 +3,9 @@
 //! message (accumulated at full rate in the simulation, which a decimated log
 //! could not recompute), the rest from the log's metadata records
 //! (`scenario`, `quadsim`, `run`). Everything but `timing` (wall-clock, never
-//! logged) equals the original.
+//! logged) equals the original. Then `report.md` and the plots, from the
+//! same summary and the log's per-step channels, exactly as `quadsim run`
+//! writes them.
 
 use std::path::PathBuf;
 
@@ -13,21 +15,22 @@ use sha2::{Digest, Sha256};
 
 use crate::error::{CliError, bad};
 use crate::log::METRICS_SUFFIX;
-use crate::log::read::{LogContents, read_log};
+use crate::log::read::{LogContents, read_log_topics};
 
 /// Arguments of `quadsim report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
     /// The log (`log.mcap` of a run).
     pub log: PathBuf,
-    /// Output directory (default: `report/` beside the log).
+    /// Output directory for `summary.json`, `report.md` and `plots/` (default: `report/` beside the log).
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
 
 /// Runs `quadsim report`.
 pub fn run(a: ReportArgs) -> Result<(), CliError> {
-    let contents = read_log(&a.log).map_err(|e| bad(e.to_string()))?;
+    let contents =
+        read_log_topics(&a.log, &crate::report::needs_topic).map_err(|e| bad(e.to_string()))?;
     let summary =
         summary_from_log(&contents).map_err(|e| bad(format!("{}: {e}", a.log.display())))?;
     let out = a.out.clone().unwrap_or_else(|| {
@@ -50,6 +53,27 @@ pub fn run(a: ReportArgs) -> Result<(), CliError> {
         source: e,
     })?;
     println!("wrote {}", path.display());
+    let text = contents.meta("scenario", "text").ok_or_else(|| {
+        bad(format!(
+            "{}: the log has no metadata 'scenario.text'",
+            a.log.display()
+        ))
+    })?;
+    let files = crate::report::write_report(
+        &crate::report::ReportInput {
+            summary: &summary,
+            scenario_text: text,
+            log: Some(&contents),
+        },
+        &out,
+    )
+    .map_err(crate::cli::run::report_error)?;
+    println!(
+        "wrote {} ({} plot files in {})",
+        files.markdown.display(),
+        files.plots.len(),
+        out.join(crate::report::PLOTS_DIR).display()
+    );
     Ok(())
 }
 

@@ -48,6 +48,9 @@ pub struct RunArgs {
     /// robot's other `push_*` keys apply). Adds `push_recovery` to summary.json.
     #[arg(long)]
     pub push_search: bool,
+    /// Write no `report.md` and `plots/` (for batch runs).
+    #[arg(long)]
+    pub no_report: bool,
 }
 
 /// Arguments of `quadsim check`.
@@ -201,6 +204,8 @@ pub struct RunOutput {
     pub interrupted: bool,
     /// What the log writer did (`None` with `--no-log`).
     pub log: Option<crate::log::WriterStats>,
+    /// The report written (`None` with `--no-report`).
+    pub report: Option<crate::report::ReportFiles>,
 }
 
 /// Steps between log samples: `--log-rate`, else `world.log_rate_hz`, else the controller rate.
@@ -240,6 +245,14 @@ pub fn run(a: RunArgs) -> Result<(), CliError> {
     if !a.quiet {
         print_table(&out.summary);
         println!("wrote {}", out.out_dir.join("summary.json").display());
+        if let Some(r) = &out.report {
+            println!(
+                "wrote {} ({} plot files in {})",
+                r.markdown.display(),
+                r.plots.len(),
+                out.out_dir.join(crate::report::PLOTS_DIR).display()
+            );
+        }
         if let Some(l) = &out.log {
             println!(
                 "wrote {} ({} messages, {:.1} MB; log writer thread: {:.3} s CPU)",
@@ -347,11 +360,22 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         path: path.display().to_string(),
         source: e,
     })?;
+    let report = if a.no_report {
+        None
+    } else {
+        Some(write_run_report(
+            &scn,
+            &summary,
+            &out_dir,
+            log_stats.is_some(),
+        )?)
+    };
     Ok(RunOutput {
         summary,
         out_dir,
         interrupted: outcome.interrupted,
         log: log_stats,
+        report,
     })
 }
 
@@ -390,6 +414,48 @@ fn add_push_searches(a: &RunArgs, scn: &Scenario, summary: &mut Value) -> Result
         }
     }
     Ok(())
+}
+
+/// `report.md` and the plots of a finished run, from its log read back (the
+/// same input `quadsim report` has, so both write the same files).
+fn write_run_report(
+    scn: &Scenario,
+    summary: &Value,
+    out_dir: &Path,
+    logged: bool,
+) -> Result<crate::report::ReportFiles, CliError> {
+    let contents = if logged {
+        Some(
+            crate::log::read::read_log_topics(
+                &out_dir.join(crate::log::LOG_FILE),
+                &crate::report::needs_topic,
+            )
+            .map_err(|e| bad(e.to_string()))?,
+        )
+    } else {
+        None
+    };
+    let mut summary = summary.clone();
+    if let Some(o) = summary.as_object_mut() {
+        o.remove("timing");
+    }
+    crate::report::write_report(
+        &crate::report::ReportInput {
+            summary: &summary,
+            scenario_text: &scn.source,
+            log: contents.as_ref(),
+        },
+        out_dir,
+    )
+    .map_err(report_error)
+}
+
+/// A report that could not be written is an I/O failure on the named file.
+pub fn report_error(e: crate::report::ReportError) -> CliError {
+    CliError::Io {
+        path: e.path,
+        source: std::io::Error::other(e.message),
+    }
 }
 
 /// Stops with an error naming the robot, time and quantity when a state is
@@ -469,8 +535,27 @@ fn opt(x: Option<f64>) -> Value {
     x.map_or(Value::Null, |v| json!(v))
 }
 
-/// One robot's metrics as JSON (the keys of `scenarios/README.md`).
-pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
+/// The actuated joints' names, in the order of the joint arrays.
+pub fn joint_names(model: &quadsim_engine::Model) -> Vec<String> {
+    (model.base_nv()..model.nv)
+        .map(|vi| model.joint_name[model.v_body[vi]].clone())
+        .collect()
+}
+
+/// One robot's metrics as JSON (the keys of `scenarios/README.md`);
+/// `joint_names` name the per-joint arrays' entries.
+pub fn metrics_json(name: &str, joint_names: &[String], m: &MetricsSummary) -> Value {
+    let joints: Vec<Value> = joint_names
+        .iter()
+        .enumerate()
+        .map(|(j, n)| {
+            json!({
+                "name": n,
+                "peak_abs_torque_nm": m.joint_peak_abs_torque_nm.get(j).copied().unwrap_or(0.0),
+                "mean_abs_torque_nm": m.joint_mean_abs_torque_nm.get(j).copied().unwrap_or(0.0),
+            })
+        })
+        .collect();
     json!({
         "name": name,
         "fell": m.fell,
@@ -491,6 +576,10 @@ pub fn metrics_json(name: &str, m: &MetricsSummary) -> Value {
         "steps": m.steps,
         "min_stability_margin_m": opt(m.min_stability_margin_m),
         "distance_m": m.distance_m,
+        "com_displacement_m": m.com_displacement_m,
+        "com_mean_velocity_mps": m.com_mean_velocity_mps,
+        "com_oscillation_m": m.com_oscillation_m,
+        "joints": joints,
     })
 }
 
@@ -510,16 +599,16 @@ pub const TRACKED_COMMAND_MIN_MPS: f64 = 0.05;
 /// on quad12.
 pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
     let m = r.run.metrics.summary();
-    let mut v = metrics_json(name, &m);
+    let names = joint_names(&r.model);
+    let mut v = metrics_json(name, &names, &m);
     let a = r.run.actuators.summary();
-    let nv0 = r.model.base_nv();
     let joints: Vec<Value> = a
         .joints
         .iter()
         .enumerate()
         .map(|(j, l)| {
             json!({
-                "joint": r.model.joint_name.get(r.model.v_body.get(nv0 + j).copied().unwrap_or(0)).cloned().unwrap_or_default(),
+                "joint": names.get(j).cloned().unwrap_or_default(),
                 "peak_torque_nm": l.peak_torque_nm,
                 "peak_torque_share": l.peak_torque_share,
                 "time_at_torque_limit_s": l.time_at_torque_limit_s,

@@ -76,11 +76,17 @@ impl LogContents {
 
 /// Reads the log at `path`.
 pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
+    read_log_topics(path, &|_| true)
+}
+
+/// Reads the log at `path`, keeping only the messages of topics for which
+/// `keep` holds (the others are still decompressed, but not copied).
+pub fn read_log_topics(path: &Path, keep: &dyn Fn(&str) -> bool) -> Result<LogContents, LogError> {
     let buf = std::fs::read(path).map_err(|e| LogError {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;
-    let c = read_log_bytes(&buf);
+    let c = read_log_bytes_topics(&buf, keep);
     if c.messages.is_empty()
         && c.metadata.is_empty()
         && let Some(e) = &c.error
@@ -95,11 +101,17 @@ pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
 
 /// Reads a log from memory, tolerating a missing end (summary, footer, magic).
 pub fn read_log_bytes(buf: &[u8]) -> LogContents {
+    read_log_bytes_topics(buf, &|_| true)
+}
+
+/// [`read_log_bytes`], keeping only the messages of topics for which `keep` holds.
+pub fn read_log_bytes_topics(buf: &[u8], keep: &dyn Fn(&str) -> bool) -> LogContents {
     let mut out = LogContents::default();
     match mcap::MessageStream::new_with_options(buf, Options::IgnoreEndMagic.into()) {
         Ok(stream) => {
             for m in stream {
                 match m {
+                    Ok(m) if !keep(&m.channel.topic) => {}
                     Ok(m) => {
                         let (schema, text) = m.channel.schema.as_ref().map_or_else(
                             || (String::new(), None),

@@ -183,6 +183,22 @@ impl Schema {
                             "samples": {"type": "integer"},
                         },
                     },
+                    "com_displacement_m": {"type": "array", "items": {"type": "number"}, "description": "CoM displacement over the run (m), heading frame x, y, z"},
+                    "com_mean_velocity_mps": {"type": "array", "items": {"type": "number"}, "description": "com_displacement_m / duration (m/s)"},
+                    "com_oscillation_m": {"type": "array", "items": {"type": "number"}, "description": "CoM oscillation amplitude per axis (m): half peak-to-peak of y, z and of detrended x"},
+                    "joints": {
+                        "type": "array",
+                        "description": "Per actuated joint: peak and time-mean |torque| (N m)",
+                        "items": {"type": "object", "properties": {
+                            "name": {"type": "string"},
+                            "peak_abs_torque_nm": {"type": "number"},
+                            "mean_abs_torque_nm": {"type": "number"},
+                        }},
+                    },
+                    "push_recovery": {"type": "object", "description": "Optional: largest push impulse recovered from"},
+                    "total_mass_kg": {"type": "number", "description": "the robot's mass with its payloads at the end (kg)"},
+                    "actuators": {"type": "object", "description": "per-joint load: peak_torque_nm, peak_torque_share (of the effort limit), time_at_torque_limit_s, time_at_speed_limit_s; and their maxima over the joints"},
+                    "load": {"type": "object", "description": "load verdict: carried (bool) and reason (null, fell, saturated, failed to track speed)"},
                 }),
             ),
             Schema::FrameTransforms => object(

@@ -1,0 +1,624 @@
+//! The text of `report.md`: plain Markdown that reads well in a terminal.
+//! Every number comes from `summary.json` (itself the simulation's full-rate
+//! metrics, or the log's `metrics` messages), so the run's report and the one
+//! `quadsim report` rebuilds from the log are the same text. No wall-clock
+//! value appears in it.
+
+use std::fmt::Write as _;
+
+use serde_json::Value;
+
+use super::{ReportInput, robot_info};
+
+/// A number with `d` decimals, "—" when absent or not finite.
+fn num(v: &Value, d: usize) -> String {
+    match v.as_f64() {
+        Some(x) if x.is_finite() => format!("{x:.d$}"),
+        _ => "—".into(),
+    }
+}
+
+/// `[min, max]` with `d` decimals.
+fn range(v: &Value, d: usize) -> String {
+    match v.as_array() {
+        Some(a) if a.len() == 2 => format!("[{}, {}]", num(&a[0], d), num(&a[1], d)),
+        _ => "—".into(),
+    }
+}
+
+/// `[x, y, z]` scaled by `k` with `d` decimals.
+fn triple(v: &Value, k: f64, d: usize) -> String {
+    match v.as_array() {
+        Some(a) if a.len() == 3 => {
+            let f = |x: &Value| {
+                x.as_f64()
+                    .map_or("—".to_string(), |x| format!("{:.d$}", x * k))
+            };
+            format!("[{}, {}, {}]", f(&a[0]), f(&a[1]), f(&a[2]))
+        }
+        _ => "—".into(),
+    }
+}
+
+/// Footnotes of a section, numbered in order of first use.
+#[derive(Default)]
+struct Notes(Vec<String>);
+
+impl Notes {
+    /// The marker of note `text` (added on first use).
+    fn mark(&mut self, text: &str) -> String {
+        let k = match self.0.iter().position(|t| t == text) {
+            Some(k) => k,
+            None => {
+                self.0.push(text.to_string());
+                self.0.len() - 1
+            }
+        };
+        format!("[^{}]", k + 1)
+    }
+
+    /// "—" with a footnote saying why.
+    fn missing(&mut self, why: &str) -> String {
+        format!("—{}", self.mark(why))
+    }
+
+    fn write(&self, out: &mut String, prefix: &str) {
+        if self.0.is_empty() {
+            return;
+        }
+        out.push('\n');
+        for (k, t) in self.0.iter().enumerate() {
+            let _ = writeln!(out, "[^{prefix}{}]: {t}", k + 1);
+        }
+    }
+}
+
+fn table(out: &mut String, header: &[&str], rows: &[Vec<String>]) {
+    let _ = writeln!(out, "| {} |", header.join(" | "));
+    let _ = writeln!(
+        out,
+        "|{}",
+        header.iter().map(|_| "---|").collect::<String>()
+    );
+    for r in rows {
+        let _ = writeln!(out, "| {} |", r.join(" | "));
+    }
+}
+
+/// The metrics table rows: (label, key, formatter).
+type Fmt = fn(&Value) -> String;
+const METRIC_ROWS: [(&str, &str, Fmt); 22] = [
+    ("fell", "fell", |v| match v.as_bool() {
+        Some(true) => "**yes**".into(),
+        Some(false) => "no".into(),
+        None => "—".into(),
+    }),
+    ("fell at (s)", "fell_at_s", |v| num(v, 3)),
+    ("mean forward speed (m/s)", "mean_forward_speed_mps", |v| {
+        num(v, 3)
+    }),
+    ("peak forward speed (m/s)", "peak_forward_speed_mps", |v| {
+        num(v, 3)
+    }),
+    ("torso height mean (m)", "base_height_mean_m", |v| num(v, 4)),
+    ("torso height peak-to-peak (m)", "base_height_p2p_m", |v| {
+        num(v, 4)
+    }),
+    ("CoM height mean (m)", "com_height_mean_m", |v| num(v, 4)),
+    ("CoM height peak-to-peak (m)", "com_height_p2p_m", |v| {
+        num(v, 4)
+    }),
+    ("roll range (rad)", "roll_range_rad", |v| range(v, 3)),
+    ("pitch range (rad)", "pitch_range_rad", |v| range(v, 3)),
+    ("yaw range (rad)", "yaw_range_rad", |v| range(v, 3)),
+    ("joint tracking RMS (rad)", "joint_rms_error_rad", |v| {
+        num(v, 4)
+    }),
+    ("max vertical foot force (N)", "max_foot_force_n", |v| {
+        num(v, 1)
+    }),
+    ("energy (J)", "energy_j", |v| num(v, 1)),
+    ("energy per step (J)", "energy_per_step_j", |v| num(v, 2)),
+    ("foot touchdowns", "steps", |v| num(v, 0)),
+    ("min stability margin (m)", "min_stability_margin_m", |v| {
+        num(v, 4)
+    }),
+    ("distance (m)", "distance_m", |v| num(v, 3)),
+    (
+        "CoM displacement x, y, z (m, heading frame)",
+        "com_displacement_m",
+        |v| triple(v, 1.0, 4),
+    ),
+    (
+        "CoM mean velocity x, y, z (m/s)",
+        "com_mean_velocity_mps",
+        |v| triple(v, 1.0, 4),
+    ),
+    (
+        "CoM oscillation amplitude x, y, z (m)",
+        "com_oscillation_m",
+        |v| triple(v, 1.0, 4),
+    ),
+    (
+        "largest push recovered from (N·s)",
+        "push_recovery",
+        push_text,
+    ),
+];
+
+fn push_text(v: &Value) -> String {
+    if v.is_null() {
+        return "—".into();
+    }
+    format!(
+        "{} ({} N for {} s)",
+        num(&v["max_impulse_ns"], 2),
+        num(&v["force_n"], 1),
+        num(&v["duration_s"], 3)
+    )
+}
+
+/// The joints whose names end in `suffix`.
+fn joints_named<'a>(robot: &'a Value, suffix: &str) -> Vec<&'a Value> {
+    robot["joints"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter(|j| j["name"].as_str().is_some_and(|n| n.ends_with(suffix)))
+        .collect()
+}
+
+/// Largest peak and the mean of the means of |τ| over joints (N·m).
+fn peak_and_mean(joints: &[&Value]) -> Option<(f64, f64)> {
+    if joints.is_empty() {
+        return None;
+    }
+    let peak = joints
+        .iter()
+        .filter_map(|j| j["peak_abs_torque_nm"].as_f64())
+        .fold(0.0, f64::max);
+    let mean = joints
+        .iter()
+        .filter_map(|j| j["mean_abs_torque_nm"].as_f64())
+        .sum::<f64>()
+        / joints.len() as f64;
+    Some((peak, mean))
+}
+
+fn study_a(out: &mut String, r: &Value, notes: &mut Notes, command: &[(f64, f64)]) {
+    let cmd = match command {
+        [] => "no speed command (not the walking controller)".to_string(),
+        [(_, v)] => format!("commanded v_x = {v} m/s"),
+        _ => format!(
+            "commanded v_x = {} m/s, changed by {} command events",
+            command[0].1,
+            command.len() - 1
+        ),
+    };
+    let _ = writeln!(
+        out,
+        "Study A, trot on flat concrete at a 1.5 m/s target (reference.md, \"Experiment A\"); this run: {cmd}.\n"
+    );
+    let ride = 0.5;
+    let p2p = r["base_height_p2p_m"].as_f64();
+    let within = |key: &str| range(&r[key], 3);
+    let opt = |notes: &mut Notes, v: &Value, d: usize, why: &str| {
+        if v.as_f64().is_some() {
+            num(v, d)
+        } else {
+            notes.missing(why)
+        }
+    };
+    let mut rows = vec![
+        vec![
+            "mean forward speed (m/s)".into(),
+            "1.2".into(),
+            num(&r["mean_forward_speed_mps"], 3),
+        ],
+        vec![
+            "peak forward speed (m/s)".into(),
+            "1.45".into(),
+            num(&r["peak_forward_speed_mps"], 3),
+        ],
+        vec![
+            "torso height peak-to-peak (m)".into(),
+            "0.007".into(),
+            num(&r["base_height_p2p_m"], 4),
+        ],
+        vec![
+            "torso height peak-to-peak, % of 0.5 m".into(),
+            "1.4 %".into(),
+            p2p.map_or("—".into(), |p| format!("{:.2} %", 100.0 * p / ride)),
+        ],
+        vec![
+            "roll range (rad)".into(),
+            "within ±0.2".into(),
+            within("roll_range_rad"),
+        ],
+        vec![
+            "pitch range (rad)".into(),
+            "within ±0.2".into(),
+            within("pitch_range_rad"),
+        ],
+        vec![
+            "yaw range (rad)".into(),
+            "within ±0.2".into(),
+            within("yaw_range_rad"),
+        ],
+        vec![
+            "joint tracking RMS (rad)".into(),
+            "0.05".into(),
+            opt(
+                notes,
+                &r["joint_rms_error_rad"],
+                4,
+                "the controller set no joint targets (no desired angles to track).",
+            ),
+        ],
+        vec![
+            "max vertical foot force (N)".into(),
+            "≈ 150".into(),
+            num(&r["max_foot_force_n"], 1),
+        ],
+        vec![
+            "energy per step (J)".into(),
+            "50".into(),
+            opt(
+                notes,
+                &r["energy_per_step_j"],
+                2,
+                "no foot touched down in the run (no steps to divide the energy by).",
+            ),
+        ],
+    ];
+    push_row(&mut rows, r, notes);
+    table(out, &["quantity", "Study A", "quadsim"], &rows);
+}
+
+fn push_row(rows: &mut Vec<Vec<String>>, r: &Value, notes: &mut Notes) {
+    if r.get("push_recovery").is_some_and(|p| !p.is_null()) {
+        rows.push(vec![
+            "largest push impulse recovered from (N·s)".into(),
+            notes.missing("the study reports no push experiment."),
+            push_text(&r["push_recovery"]),
+        ]);
+    }
+}
+
+fn study_b(out: &mut String, r: &Value, notes: &mut Notes) {
+    let _ = writeln!(
+        out,
+        "Study B, 5 s trot with prescribed joint angles (reference.md, \"Experiment B\"). Table 3, CoM per axis; its start and end values are in an unknown frame and are left out. quadsim's values are signed, in the heading frame (x along the start heading, y to its left, z up); Study B's are magnitudes.\n"
+    );
+    let axis = ["forward x", "lateral y", "vertical z"];
+    let disp = [466.7, 18.5, 2.34];
+    let speed = [93.34, 3.7, 0.468];
+    let osc = [5.2, 9.25, 1.17];
+    let mm = |key: &str, a: usize| {
+        r[key]
+            .as_array()
+            .and_then(|v| v.get(a))
+            .and_then(Value::as_f64)
+            .map_or("—".to_string(), |x| format!("{:.2}", x * 1e3))
+    };
+    let mut rows = Vec::new();
+    for a in 0..3 {
+        rows.push(vec![
+            format!("{} displacement (mm)", axis[a]),
+            format!("{}", disp[a]),
+            mm("com_displacement_m", a),
+        ]);
+    }
+    for a in 0..3 {
+        rows.push(vec![
+            format!("{} mean speed (mm/s)", axis[a]),
+            format!("{}", speed[a]),
+            mm("com_mean_velocity_mps", a),
+        ]);
+    }
+    for a in 0..3 {
+        rows.push(vec![
+            format!("{} oscillation amplitude (mm)", axis[a]),
+            format!("±{}", osc[a]),
+            format!("±{}", mm("com_oscillation_m", a)),
+        ]);
+    }
+    table(out, &["quantity", "Study B", "quadsim"], &rows);
+    let _ = writeln!(
+        out,
+        "\nTable 4, joint torques: Study B prints N·mm (its knee peak, 300 N·mm, is the Futaba S3003's rating), far below what the legs' own weight needs, so the ratios are the comparison. quadsim: peak = the largest |τ| over the four legs, mean = the legs' average time-mean |τ|; hip τ2 is `*_hip_pitch`, knee τ3 is `*_knee`.\n"
+    );
+    let hip = peak_and_mean(&joints_named(r, "hip_pitch"));
+    let knee = peak_and_mean(&joints_named(r, "knee"));
+    let no_joint = "the robot has no joint named `*_hip_pitch` or `*_knee`.";
+    let val = |v: Option<f64>, d: usize, notes: &mut Notes| {
+        v.filter(|x| x.is_finite())
+            .map_or_else(|| notes.missing(no_joint), |x| format!("{x:.d$}"))
+    };
+    let zero = "undefined: the torque in the denominator is zero (no actuator torque was applied).";
+    let ratio = |a: Option<f64>, b: Option<f64>, notes: &mut Notes| match (a, b) {
+        (Some(a), Some(b)) if b > 0.0 => format!("{:.2}", a / b),
+        (Some(_), Some(_)) => notes.missing(zero),
+        _ => notes.missing(no_joint),
+    };
+    let (hp, hm) = (hip.map(|h| h.0), hip.map(|h| h.1));
+    let (kp, km) = (knee.map(|k| k.0), knee.map(|k| k.1));
+    let mut rows = vec![
+        vec![
+            "hip τ2 peak (N·m)".into(),
+            "0.085".into(),
+            val(hp, 3, notes),
+        ],
+        vec![
+            "hip τ2 mean (N·m)".into(),
+            "0.025".into(),
+            val(hm, 3, notes),
+        ],
+        vec![
+            "knee τ3 peak (N·m)".into(),
+            "0.300".into(),
+            val(kp, 3, notes),
+        ],
+        vec![
+            "knee τ3 mean (N·m)".into(),
+            "0.080".into(),
+            val(km, 3, notes),
+        ],
+        vec![
+            "knee / hip, peaks".into(),
+            format!("{:.2}", 300.0 / 85.0),
+            ratio(kp, hp, notes),
+        ],
+        vec![
+            "knee / hip, means".into(),
+            format!("{:.2}", 80.0 / 25.0),
+            ratio(km, hm, notes),
+        ],
+        vec![
+            "hip peak / mean".into(),
+            format!("{:.2}", 85.0 / 25.0),
+            ratio(hp, hm, notes),
+        ],
+        vec![
+            "knee peak / mean".into(),
+            format!("{:.2}", 300.0 / 80.0),
+            ratio(kp, km, notes),
+        ],
+    ];
+    let margin = r["min_stability_margin_m"].as_f64();
+    rows.push(vec![
+        "least stability margin (mm)".into(),
+        "> 20".into(),
+        margin.map_or_else(
+            || {
+                notes.missing(
+                    "fewer than three feet were ever in contact together (no support polygon).",
+                )
+            },
+            |m| format!("{:.1}", m * 1e3),
+        ),
+    ]);
+    push_row(&mut rows, r, notes);
+    table(out, &["quantity", "Study B", "quadsim"], &rows);
+}
+
+/// The whole `report.md`. `figures` lists, per robot, the plots written
+/// (caption, file stem under `plots/`).
+pub fn report_markdown(
+    input: &ReportInput<'_>,
+    figures: &[(String, Vec<(String, String)>)],
+) -> String {
+    let s = input.summary;
+    let robots: Vec<&Value> = s["robots"].as_array().into_iter().flatten().collect();
+    let mut out = String::new();
+    let name = s["scenario"].as_str().unwrap_or("?");
+    let _ = writeln!(out, "# quadsim run report: `{name}`\n");
+    let interrupted = s["interrupted"].as_bool().unwrap_or(false);
+    if interrupted {
+        let _ = writeln!(
+            out,
+            "**Interrupted** (Ctrl-C or SIGTERM): everything below covers the part that ran.\n"
+        );
+    }
+    let fell: Vec<String> = robots
+        .iter()
+        .map(|r| {
+            let n = r["name"].as_str().unwrap_or("?");
+            match r["fell_at_s"].as_f64() {
+                Some(t) => format!("{n}: **yes**, at t = {t:.3} s"),
+                None => format!("{n}: no"),
+            }
+        })
+        .collect();
+    let sha = s["scenario_sha256"].as_str().unwrap_or("?");
+    let rows = vec![
+        vec![
+            "scenario".into(),
+            format!("`{name}` (sha256 `{}…`)", &sha[..sha.len().min(16)]),
+        ],
+        vec!["seed".into(), s["seed"].to_string()],
+        vec![
+            "quadsim".into(),
+            format!(
+                "{}, commit `{}`",
+                s["quadsim_version"].as_str().unwrap_or("?"),
+                s["git_commit"].as_str().unwrap_or("?")
+            ),
+        ],
+        vec![
+            "simulated".into(),
+            format!(
+                "{} s: {} steps of {} s, {}, controller at {} Hz",
+                num(&s["sim_time_s"], 3),
+                s["steps"],
+                s["dt_s"],
+                s["integrator"].as_str().unwrap_or("?"),
+                s["controller_rate_hz"]
+            ),
+        ],
+        vec![
+            "interrupted".into(),
+            if interrupted { "**yes**" } else { "no" }.into(),
+        ],
+        vec!["fell".into(), fell.join("; ")],
+    ];
+    table(&mut out, &["run", ""], &rows);
+
+    // metrics, one column per robot
+    let _ = writeln!(
+        out,
+        "\n## Metrics\n\nAccumulated at every simulation step (definitions: scenarios/README.md, \"Metrics\").\n"
+    );
+    let mut header = vec!["metric"];
+    header.extend(robots.iter().map(|r| r["name"].as_str().unwrap_or("?")));
+    let any_push = robots
+        .iter()
+        .any(|r| r.get("push_recovery").is_some_and(|p| !p.is_null()));
+    let rows: Vec<Vec<String>> = METRIC_ROWS
+        .iter()
+        .filter(|(_, key, _)| *key != "push_recovery" || any_push)
+        .map(|(label, key, f)| {
+            let mut row = vec![label.to_string()];
+            row.extend(robots.iter().map(|r| f(&r[*key])));
+            row
+        })
+        .collect();
+    table(&mut out, &header, &rows);
+    for r in &robots {
+        let joints = r["joints"].as_array().cloned().unwrap_or_default();
+        if joints.is_empty() {
+            continue;
+        }
+        let _ = writeln!(
+            out,
+            "\nJoint torques of `{}` (applied |τ|, N·m):\n",
+            r["name"].as_str().unwrap_or("?")
+        );
+        let rows: Vec<Vec<String>> = joints
+            .iter()
+            .map(|j| {
+                vec![
+                    format!("`{}`", j["name"].as_str().unwrap_or("?")),
+                    num(&j["peak_abs_torque_nm"], 2),
+                    num(&j["mean_abs_torque_nm"], 2),
+                ]
+            })
+            .collect();
+        table(&mut out, &["joint", "peak", "time-mean"], &rows);
+    }
+
+    let _ = writeln!(out, "\n## Plots\n");
+    if input.log.is_none() {
+        let _ = writeln!(
+            out,
+            "None: the run wrote no log (`--no-log`), and the plots are drawn from the log.\n"
+        );
+    } else if figures.is_empty() {
+        let _ = writeln!(out, "None: no robot has per-step channels in the log.\n");
+    }
+    for (robot, figs) in figures {
+        let _ = writeln!(out, "### `{robot}`\n");
+        for (caption, stem) in figs {
+            let _ = writeln!(
+                out,
+                "**{caption}** ([SVG](plots/{stem}.svg), [PNG](plots/{stem}.png))\n\n![{caption}](plots/{stem}.svg)\n"
+            );
+        }
+    }
+
+    let _ = writeln!(
+        out,
+        "## Studies side by side\n\nThe studies' reported figures (as restated in the project's `shared/reference.md`) beside this run's. They are what the studies printed, not targets to force; where this run's conditions differ (speed command, terrain, controller), the numbers are not like for like.\n"
+    );
+    for (k, r) in robots.iter().enumerate() {
+        let n = r["name"].as_str().unwrap_or("?");
+        let info = robot_info(input.scenario_text, n);
+        let _ = writeln!(out, "### `{n}` ({})\n", info.model);
+        let mut notes = Notes::default();
+        let mut body = String::new();
+        match info.model.as_str() {
+            "quad16" => study_a(&mut body, r, &mut notes, &info.speed_command),
+            "quad12" => study_b(&mut body, r, &mut notes),
+            _ => {
+                let _ = writeln!(
+                    body,
+                    "Neither study's robot (Study A is `quad16`, Study B `quad12`): no rows."
+                );
+            }
+        }
+        // footnote labels are made unique per robot: `[^k-n]`
+        let prefix = format!("{}-", k + 1);
+        out.push_str(&body.replace("[^", &format!("[^{prefix}")));
+        notes.write(&mut out, &prefix);
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn summary(robot: Value) -> Value {
+        json!({"scenario": "t", "seed": 1, "sim_time_s": 1.0, "steps": 2000, "dt_s": 0.0005,
+               "integrator": "semi_implicit_euler", "controller_rate_hz": 500.0,
+               "quadsim_version": "0", "git_commit": "x", "scenario_sha256": "ab",
+               "robots": [robot]})
+    }
+
+    const SCN: &str = "format_version = 1\n[[robots]]\nname = \"rex\"\nmodel = \"quad16\"\n";
+
+    #[test]
+    fn push_recovery_is_a_row_when_present_and_absent_otherwise() {
+        let with = summary(json!({"name": "rex", "energy_per_step_j": 12.0,
+            "push_recovery": {"max_impulse_ns": 15.0, "force_n": 150.0, "duration_s": 0.1}}));
+        let input = ReportInput {
+            summary: &with,
+            scenario_text: SCN,
+            log: None,
+        };
+        let md = report_markdown(&input, &[]);
+        assert!(
+            md.contains("| largest push recovered from (N·s) | 15.00 (150.0 N for 0.100 s) |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| largest push impulse recovered from (N·s) | —[^1-"),
+            "{md}"
+        );
+        assert!(md.contains("the study reports no push experiment"));
+        let without = summary(json!({"name": "rex", "energy_per_step_j": 12.0}));
+        let input = ReportInput {
+            summary: &without,
+            scenario_text: SCN,
+            log: None,
+        };
+        assert!(!report_markdown(&input, &[]).contains("push"));
+    }
+
+    #[test]
+    fn a_missing_value_is_a_dash_with_a_footnote_saying_why() {
+        let s =
+            summary(json!({"name": "rex", "joint_rms_error_rad": null, "energy_per_step_j": null}));
+        let input = ReportInput {
+            summary: &s,
+            scenario_text: SCN,
+            log: None,
+        };
+        let md = report_markdown(&input, &[]);
+        assert!(
+            md.contains("| joint tracking RMS (rad) | 0.05 | —[^1-1] |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| energy per step (J) | 50 | —[^1-2] |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("[^1-1]: the controller set no joint targets"),
+            "{md}"
+        );
+        assert!(md.contains("[^1-2]: no foot touched down"), "{md}");
+    }
+}

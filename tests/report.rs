@@ -1,0 +1,288 @@
+//! `report.md` and `plots/`: written by `quadsim run`, rebuilt identically by
+//! `quadsim report LOG` from the log alone; valid SVG and PNG; the numbers in
+//! the text are the summary's; Study A's rows for quad16, Study B's for quad12.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("quadsim-report-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn quadsim(args: &[&str]) -> std::process::Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_quadsim"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "quadsim {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+const PLOTS: [&str; 8] = [
+    "com",
+    "speed",
+    "attitude",
+    "joints",
+    "torques",
+    "foot_forces",
+    "foot_paths",
+    "support",
+];
+
+/// Decodes a PNG; returns (width, height, number of distinct RGB colours).
+fn decode_png(p: &Path) -> (u32, u32, usize) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size().unwrap()];
+    let info = r.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb, "{}", p.display());
+    let mut colours = std::collections::BTreeSet::new();
+    for px in buf[..info.buffer_size()].chunks(3) {
+        colours.insert((px[0], px[1], px[2]));
+    }
+    (info.width, info.height, colours.len())
+}
+
+#[test]
+fn a_trot_run_writes_report_and_plots_that_report_rebuilds_from_the_log() {
+    let dir = tmp("trot");
+    let out = dir.join("run");
+    let scn = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/trot.toml");
+    quadsim(&["run", scn, "--duration", "1", "--out", s(&out), "--quiet"]);
+    let summary = read_json(&out.join("summary.json"));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+
+    // the plots: valid SVG and PNG of the stated size, with drawn content
+    for p in PLOTS {
+        let svg = std::fs::read_to_string(out.join(format!("plots/rex_{p}.svg"))).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{p}"
+        );
+        assert!(
+            svg.contains("<polyline") || svg.contains("<path"),
+            "{p}: no line"
+        );
+        let (w, h, colours) = decode_png(&out.join(format!("plots/rex_{p}.png")));
+        assert_eq!((w, h), quadsim::report::plots::PLOT_SIZE, "{p}");
+        assert!(colours > 10, "{p}: {colours} colours: a blank image?");
+        assert!(
+            report.contains(&format!("(plots/rex_{p}.svg)")),
+            "{p} not linked"
+        );
+    }
+    // the captions are drawn with the bundled font: axis text appears in the SVG
+    let speed = std::fs::read_to_string(out.join("plots/rex_speed.svg")).unwrap();
+    assert!(speed.contains("commanded v_x") && speed.contains("t (s)"));
+
+    // the numbers in the text are the summary's
+    let r = &summary["robots"][0];
+    let f3 = |k: &str| format!("{:.3}", r[k].as_f64().unwrap());
+    assert!(
+        report.contains(&format!(
+            "| mean forward speed (m/s) | 1.2 | {} |",
+            f3("mean_forward_speed_mps")
+        )),
+        "{report}"
+    );
+    assert!(report.contains(&format!(
+        "| max vertical foot force (N) | ≈ 150 | {:.1} |",
+        r["max_foot_force_n"].as_f64().unwrap()
+    )));
+    let p2p = r["base_height_p2p_m"].as_f64().unwrap();
+    assert!(report.contains(&format!("| {:.2} % |", 100.0 * p2p / 0.5)));
+    assert!(report.contains(&format!(
+        "| joint tracking RMS (rad) | 0.05 | {:.4} |",
+        r["joint_rms_error_rad"].as_f64().unwrap()
+    )));
+    assert!(report.contains("commanded v_x = 0.5 m/s"));
+    let knee = r["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|j| j["name"] == "LF_knee")
+        .unwrap();
+    assert!(report.contains(&format!(
+        "| `LF_knee` | {:.2} | {:.2} |",
+        knee["peak_abs_torque_nm"].as_f64().unwrap(),
+        knee["mean_abs_torque_nm"].as_f64().unwrap()
+    )));
+    assert!(!report.contains("wall"), "no wall-clock value in report.md");
+
+    // `quadsim report` rebuilds the same summary (but timing), text and plots
+    let rebuilt = dir.join("rebuilt");
+    quadsim(&["report", s(&out.join("log.mcap")), "--out", s(&rebuilt)]);
+    let mut expected = summary.clone();
+    expected.as_object_mut().unwrap().remove("timing");
+    assert_eq!(read_json(&rebuilt.join("summary.json")), expected);
+    assert_eq!(
+        std::fs::read_to_string(rebuilt.join("report.md")).unwrap(),
+        report
+    );
+    for p in PLOTS {
+        for ext in ["svg", "png"] {
+            let name = format!("plots/rex_{p}.{ext}");
+            assert!(
+                std::fs::read(out.join(&name)).unwrap()
+                    == std::fs::read(rebuilt.join(&name)).unwrap(),
+                "{name} differs"
+            );
+        }
+    }
+
+    // --no-report writes none
+    let bare = dir.join("bare");
+    quadsim(&[
+        "run",
+        scn,
+        "--duration",
+        "0.1",
+        "--out",
+        s(&bare),
+        "--quiet",
+        "--no-report",
+    ]);
+    assert!(bare.join("summary.json").exists());
+    assert!(!bare.join("report.md").exists() && !bare.join("plots").exists());
+}
+
+/// Study B's rows for a quad12: the per-axis CoM figures and the torque
+/// ratios are the summary's numbers; a run without a log has no plots.
+#[test]
+fn a_quad12_gets_study_b_rows() {
+    let dir = tmp("quad12");
+    let scn = dir.join("s.toml");
+    std::fs::write(
+        &scn,
+        r#"format_version = 1
+[world]
+name = "small"
+dt_s = 0.0005
+duration_s = 0.5
+default_ground = "concrete"
+
+[[robots]]
+name = "bee"
+model = "quad12"
+[robots.controller]
+kind = "joint_pd"
+bandwidth_hz = 3.0
+gravity_compensation = "static"
+"#,
+    )
+    .unwrap();
+    let out = dir.join("run");
+    quadsim(&["run", s(&scn), "--out", s(&out), "--quiet", "--no-log"]);
+    let summary = read_json(&out.join("summary.json"));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(!out.join("plots").exists());
+    assert!(report.contains("wrote no log"), "{report}");
+    assert!(report.contains("Study B") && !report.contains("| quantity | Study A |"));
+    let r = &summary["robots"][0];
+    let mm = |k: &str, a: usize| format!("{:.2}", r[k][a].as_f64().unwrap() * 1e3);
+    assert!(report.contains(&format!(
+        "| forward x displacement (mm) | 466.7 | {} |",
+        mm("com_displacement_m", 0)
+    )));
+    assert!(report.contains(&format!(
+        "| vertical z oscillation amplitude (mm) | ±1.17 | ±{} |",
+        mm("com_oscillation_m", 2)
+    )));
+    // knee / hip peak ratio from the per-joint peaks
+    let peak = |suffix: &str| {
+        r["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|j| j["name"].as_str().unwrap().ends_with(suffix))
+            .map(|j| j["peak_abs_torque_nm"].as_f64().unwrap())
+            .fold(0.0, f64::max)
+    };
+    let ratio = peak("knee") / peak("hip_pitch");
+    assert!(ratio.is_finite() && ratio > 0.0);
+    assert!(
+        report.contains(&format!("| knee / hip, peaks | 3.53 | {ratio:.2} |")),
+        "{report}"
+    );
+    // standing on four feet: a support polygon, a positive margin
+    let m = r["min_stability_margin_m"].as_f64().unwrap();
+    assert!(m > 0.0);
+    assert!(report.contains(&format!(
+        "| least stability margin (mm) | > 20 | {:.1} |",
+        m * 1e3
+    )));
+}
+
+/// Several robots: one set of plots per robot, named after it, a metrics
+/// column and a studies section each; a robot logged with `log = false` has
+/// its metrics but no plots.
+#[test]
+fn several_robots_get_plots_named_per_robot() {
+    let dir = tmp("grounds");
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/grounds.toml"
+    ))
+    .unwrap();
+    // the last robot is not logged
+    let pos = src.rfind("[[robots]]").unwrap();
+    let (a, b) = src.split_at(pos);
+    let edited = format!(
+        "{a}{}",
+        b.replacen("[[robots]]\n", "[[robots]]\nlog = false\n", 1)
+    );
+    let scn = dir.join("grounds.toml");
+    std::fs::write(&scn, edited).unwrap();
+    let out = dir.join("run");
+    quadsim(&[
+        "run",
+        s(&scn),
+        "--duration",
+        "0.1",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let summary = read_json(&out.join("summary.json"));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let names: Vec<&str> = summary["robots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names.len(), 4);
+    let header = report
+        .lines()
+        .find(|l| l.starts_with("| metric |"))
+        .unwrap();
+    for (k, n) in names.iter().enumerate() {
+        assert!(header.contains(n), "{header}");
+        assert!(report.contains(&format!("### `{n}` (quad16)")), "{n}");
+        let logged = k < 3;
+        for p in PLOTS {
+            assert_eq!(
+                out.join(format!("plots/{n}_{p}.png")).exists(),
+                logged,
+                "{n}_{p}"
+            );
+        }
+    }
+}
