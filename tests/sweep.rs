@@ -214,3 +214,74 @@ fn bad_studies_name_the_path_and_line() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("quadsim sweep"));
     let _ = std::fs::remove_dir_all(d);
 }
+
+#[test]
+fn report_analyses_correlate_and_judge_loads() {
+    let d = dir("analyses");
+    // correlations: total mass rises with the torso mass (ρ = +1 exactly)
+    std::fs::write(
+        d.join("c.toml"),
+        study(
+            "\"robots[0].params.torso.mass_kg\" = [8.0, 10.0, 12.0, 14.0]",
+            "[[report.correlations]]\nlabel = \"torso mass\"\nparam = \"robots[0].params.torso.mass_kg\"\nmetric = \"total_mass_kg\"\nexpect = \"positive\"\n\
+             [[report.correlations]]\nlabel = \"torso mass, claimed wrong\"\nparam = \"robots[0].params.torso.mass_kg\"\nmetric = \"total_mass_kg\"\nexpect = \"negative\"\n",
+        ),
+    )
+    .unwrap();
+    let o = quadsim(&["sweep", "c.toml", "--out", "c", "--quiet"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(d.join("c/report.md")).unwrap();
+    assert!(md.contains("| 4 | +1.000 | positive | yes |"), "{md}");
+    assert!(md.contains("| 4 | +1.000 | negative | **no** |"), "{md}");
+    // load carrying: 60 kg on 40 N·m joints is not carried; 0 and 10 kg are
+    let base = BASE.replace(
+        "model = \"quad16\"\n",
+        "model = \"quad16\"\nparams = { \"actuator.effort_limit_nm\" = 40.0 }\n",
+    ) + "\n[[robots.payloads]]\nname = \"box\"\nmass_kg = 0.0\nsize_m = [0.3, 0.2, 0.1]\noffset_m = [0.0, 0.0, 0.1]\n";
+    std::fs::write(
+        d.join("base.toml"),
+        base.replace("duration_s = 0.1", "duration_s = 1.0"),
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("l.toml"),
+        study(
+            "\"robots[0].payloads[0].mass_kg\" = [0.0, 10.0, 60.0]",
+            "[report.load]\npayload = \"robots[0].payloads[0].mass_kg\"\n",
+        ),
+    )
+    .unwrap();
+    let o = quadsim(&["sweep", "l.toml", "--out", "l", "--quiet"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(d.join("l/report.md")).unwrap();
+    let row = |m: &str| {
+        md.lines()
+            .find(|l| l.starts_with(&format!("| {m} |")))
+            .unwrap_or_else(|| panic!("no {m} kg row in {md}"))
+            .to_string()
+    };
+    assert!(row("0.0").ends_with("| ok |"), "{}", row("0.0"));
+    assert!(row("10.0").ends_with("| ok |"), "{}", row("10.0"));
+    let heavy = row("60.0");
+    assert!(
+        heavy.ends_with("| fell |") || heavy.ends_with("| saturated |"),
+        "{heavy}"
+    );
+    assert!(
+        md.contains("Largest payload carried: **10.0 kg**"),
+        "{md}"
+    );
+    // an analysis naming a path the study does not vary is refused
+    std::fs::write(
+        d.join("bad.toml"),
+        study(
+            "\"robots[0].params.torso.mass_kg\" = [8.0, 10.0]",
+            "[report.load]\npayload = \"robots[0].payloads[0].mass_kg\"\n",
+        ),
+    )
+    .unwrap();
+    let o = quadsim(&["sweep", "bad.toml", "--out", "bad", "--quiet"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("report.load.payload"));
+    let _ = std::fs::remove_dir_all(d);
+}

@@ -113,6 +113,7 @@ fn header(study: &Study) -> ResultsHeader {
         study_sha256: format!("{:x}", h.finalize()),
         variants_total: study.variants.len(),
         paths: study.file.vary.keys().cloned().collect(),
+        analyses: study.file.report.clone(),
     }
 }
 
@@ -219,6 +220,7 @@ pub fn merge(a: MergeArgs) -> Result<(), CliError> {
                         .collect()
                 })
                 .unwrap_or_default(),
+            analyses: serde_json::from_value(v["report"].clone()).unwrap_or_default(),
         };
         match &head {
             None => head = Some((h, p.clone())),

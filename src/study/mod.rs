@@ -18,6 +18,7 @@
 //! fixed order, so a shard (`--shard I/N`: the I-th of N contiguous slices)
 //! and a merge of all shards give the same rows as one whole run.
 
+pub mod analysis;
 pub mod output;
 pub mod sample;
 
@@ -50,6 +51,9 @@ pub struct StudyFile {
     pub sweep: SweepSpec,
     /// Path in the base scenario → variation.
     pub vary: BTreeMap<String, toml::Value>,
+    /// Analyses for `report.md` (correlations, load carrying).
+    #[serde(default)]
+    pub report: analysis::StudyReportSpec,
 }
 
 /// `[sweep]`.
@@ -156,6 +160,28 @@ pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
         check_path(&base_path, &base_table, p, &var)
             .map_err(|e| loc.at(&kp, format!("'{p}': {e}")))?;
         vary.push((p.clone(), var));
+    }
+    for (k, c) in file.report.correlations.iter().enumerate() {
+        if !file.vary.contains_key(&c.param) {
+            return Err(loc.at(
+                &format!("report.correlations[{k}].param"),
+                format!("'{}' is not a varied path of this study", c.param),
+            ));
+        }
+        if !["positive", "negative"].contains(&c.expect.as_str()) {
+            return Err(loc.at(
+                &format!("report.correlations[{k}].expect"),
+                "must be \"positive\" or \"negative\"",
+            ));
+        }
+    }
+    if let Some(l) = &file.report.load
+        && !file.vary.contains_key(&l.payload)
+    {
+        return Err(loc.at(
+            "report.load.payload",
+            format!("'{}' is not a varied path of this study", l.payload),
+        ));
     }
     let variants = sample::variants(&loc, &file.sweep, &vary)?;
     let name = file.name.clone().unwrap_or_else(|| {

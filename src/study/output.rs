@@ -24,6 +24,8 @@ pub struct ResultsHeader {
     pub variants_total: usize,
     /// Varied paths, in column order.
     pub paths: Vec<String>,
+    /// The study's `[report]` analyses (kept in results.json for `merge`).
+    pub analyses: super::analysis::StudyReportSpec,
 }
 
 /// One row of `results.json`.
@@ -54,7 +56,8 @@ fn toml_to_json(v: &toml::Value) -> Value {
 }
 
 /// Scalar metrics of a summary, flattened: `metric` for a one-robot run,
-/// `robot/metric` otherwise; `[min, max]` ranges become `_min`/`_max`.
+/// `robot/metric` otherwise; `[min, max]` ranges become `_min`/`_max`,
+/// `[x, y, z]` vectors `_x`/`_y`/`_z`, and an object's scalars `object.key`.
 pub fn flat_metrics(summary: &Value) -> Vec<(String, Value)> {
     let robots = summary["robots"].as_array().cloned().unwrap_or_default();
     let single = robots.len() == 1;
@@ -72,11 +75,27 @@ pub fn flat_metrics(summary: &Value) -> Vec<(String, Value)> {
                 format!("{name}/{k}")
             };
             match v {
-                Value::Array(a) if a.len() == 2 => {
+                Value::Array(a) if a.len() == 2 && a.iter().all(Value::is_number) => {
                     out.push((format!("{col}_min"), a[0].clone()));
                     out.push((format!("{col}_max"), a[1].clone()));
                 }
+                Value::Array(a) if a.len() == 3 && a.iter().all(Value::is_number) => {
+                    for (axis, x) in ["x", "y", "z"].iter().zip(a) {
+                        out.push((format!("{col}_{axis}"), x.clone()));
+                    }
+                }
                 Value::Number(_) | Value::Bool(_) | Value::Null => out.push((col, v.clone())),
+                // one level of objects (`load`, `actuators`, `push_recovery`): their scalars
+                Value::Object(o) => {
+                    for (k2, v2) in o {
+                        if matches!(
+                            v2,
+                            Value::Number(_) | Value::Bool(_) | Value::Null | Value::String(_)
+                        ) {
+                            out.push((format!("{col}.{k2}"), v2.clone()));
+                        }
+                    }
+                }
                 _ => {}
             }
         }
@@ -106,6 +125,7 @@ pub fn write_results(
         "study_sha256": header.study_sha256,
         "variants_total": header.variants_total,
         "paths": header.paths,
+        "report": serde_json::to_value(&header.analyses).expect("serialisable"),
         "shard": shard.map(|(i, n)| json!({"index": i, "count": n})),
         "rows": rows,
     });
@@ -226,6 +246,7 @@ fn report_md(
         };
         s += &format!(" | {status} |\n");
     }
+    s += &super::analysis::sections(&h.analyses, rows, flats);
     s
 }
 
