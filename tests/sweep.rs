@@ -126,6 +126,27 @@ fn shards_merge_into_the_whole_sweep() {
         std::fs::read_to_string(d.join("merged/results.csv")).unwrap(),
         csv
     );
+    // plots of the metrics against each varied value, the same from the merge
+    for stem in [
+        "metrics_vs_robots_0__controller_bandwidth_hz",
+        "metrics_vs_robots_0__params_torso_mass_kg",
+    ] {
+        for ext in ["svg", "png"] {
+            let f = format!("plots/{stem}.{ext}");
+            let whole_plot = std::fs::read(d.join("whole").join(&f)).unwrap();
+            assert!(whole_plot.len() > 1000, "{f}");
+            assert_eq!(
+                std::fs::read(d.join("merged").join(&f)).unwrap(),
+                whole_plot,
+                "{f}"
+            );
+        }
+    }
+    let md = std::fs::read_to_string(d.join("whole/report.md")).unwrap();
+    assert!(
+        md.contains("plots/metrics_vs_robots_0__params_torso_mass_kg.png"),
+        "{md}"
+    );
     // a shard given twice overlaps
     let o = quadsim(&["merge", "shard0", "shard0", "--out", "bad"], &d);
     assert!(!o.status.success());
@@ -267,10 +288,7 @@ fn report_analyses_correlate_and_judge_loads() {
         heavy.ends_with("| fell |") || heavy.ends_with("| saturated |"),
         "{heavy}"
     );
-    assert!(
-        md.contains("Largest payload carried: **10.0 kg**"),
-        "{md}"
-    );
+    assert!(md.contains("Largest payload carried: **10.0 kg**"), "{md}");
     // an analysis naming a path the study does not vary is refused
     std::fs::write(
         d.join("bad.toml"),

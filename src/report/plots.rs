@@ -67,6 +67,8 @@ pub struct Panel {
     pub markers: Vec<(String, (f64, f64))>,
     /// Same scale on both axes (top views).
     pub equal_axes: bool,
+    /// Unlabelled points (x, y), drawn as small dots (sweeps: one per run).
+    pub scatter: Vec<(f64, f64)>,
 }
 
 /// A plot: panels stacked in a grid of `columns`.
@@ -119,13 +121,15 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> R
         .iter()
         .flat_map(|l| l.points.iter().map(|q| q.0))
         .chain(p.polygons.iter().flat_map(|(_, q)| q.iter().map(|q| q.0)))
-        .chain(p.markers.iter().map(|m| m.1.0));
+        .chain(p.markers.iter().map(|m| m.1.0))
+        .chain(p.scatter.iter().map(|q| q.0));
     let ys = p
         .lines
         .iter()
         .flat_map(|l| l.points.iter().map(|q| q.1))
         .chain(p.polygons.iter().flat_map(|(_, q)| q.iter().map(|q| q.1)))
-        .chain(p.markers.iter().map(|m| m.1.1));
+        .chain(p.markers.iter().map(|m| m.1.1))
+        .chain(p.scatter.iter().map(|q| q.1));
     let (mut x0, mut x1) = range(xs);
     let (mut y0, mut y1) = range(ys);
     if p.equal_axes {
@@ -215,6 +219,12 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> R
                 });
             }
         }
+    }
+    if !p.scatter.is_empty() {
+        let c = PALETTE[0];
+        chart
+            .draw_series(p.scatter.iter().map(|q| Circle::new(*q, 3, c.filled())))
+            .map_err(err)?;
     }
     for (k, (label, pt)) in p.markers.iter().enumerate() {
         let c = if k == 0 {

@@ -168,9 +168,105 @@ pub fn write_results(
     }
     w.flush().map_err(|e| io(&p, e))?;
 
+    let plots = write_plots(dir, header, rows, &flats)?;
     let p = dir.join("report.md");
-    std::fs::write(&p, report_md(header, shard, rows, &flats)).map_err(|e| io(&p, e))?;
+    let mut md = report_md(header, shard, rows, &flats);
+    if !plots.is_empty() {
+        md += "\n## Plots\n\nThe main metrics against each varied value, one dot per run \
+               (every metric is in `results.csv`):\n\n";
+        for (path, stem) in &plots {
+            md += &format!("- `{path}`: [SVG](plots/{stem}.svg), ![{path}](plots/{stem}.png)\n");
+        }
+    }
+    std::fs::write(&p, md).map_err(|e| io(&p, e))?;
     Ok(())
+}
+
+/// Metrics plotted against each varied value (when present).
+const PLOTTED_METRICS: [(&str, &str); 9] = [
+    ("fell", "fell (1 = yes)"),
+    ("mean_forward_speed_mps", "mean forward speed (m/s)"),
+    ("distance_m", "distance (m)"),
+    ("energy_j", "energy (J)"),
+    ("min_stability_margin_m", "min stability margin (m)"),
+    ("base_height_p2p_m", "torso height p2p (m)"),
+    ("max_foot_force_n", "max foot force (N)"),
+    ("joint_rms_error_rad", "joint RMS error (rad)"),
+    ("actuators.max_peak_torque_share", "peak torque share"),
+];
+
+/// `plots/metrics_vs_<path>.svg|png` for each numeric varied path: one panel
+/// per main metric (the first robot's, for several robots). Returns (path, stem).
+fn write_plots(
+    dir: &Path,
+    header: &ResultsHeader,
+    rows: &[Value],
+    flats: &[BTreeMap<String, Value>],
+) -> Result<Vec<(String, String)>, CliError> {
+    use crate::report::plots::{Figure, Panel, write_figure};
+    let ok: Vec<usize> = (0..rows.len())
+        .filter(|&i| rows[i]["status"] == "ok")
+        .collect();
+    let mut out = Vec::new();
+    let plot_dir = dir.join("plots");
+    for path in &header.paths {
+        let xs: Vec<Option<f64>> = ok
+            .iter()
+            .map(|&i| rows[i]["params"][path].as_f64())
+            .collect();
+        if ok.is_empty() || xs.iter().any(Option::is_none) {
+            continue; // names or tables: no axis
+        }
+        let mut panels = Vec::new();
+        for (metric, label) in PLOTTED_METRICS {
+            let pts: Vec<(f64, f64)> = ok
+                .iter()
+                .zip(&xs)
+                .filter_map(|(&i, x)| {
+                    let f = &flats[i];
+                    let key = f
+                        .keys()
+                        .find(|k| *k == metric || k.ends_with(&format!("/{metric}")))?;
+                    let y = match &f[key] {
+                        Value::Bool(b) => f64::from(u8::from(*b)),
+                        v => v.as_f64()?,
+                    };
+                    Some(((*x)?, y))
+                })
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            panels.push(Panel {
+                title: label.to_string(),
+                x_label: path.clone(),
+                y_label: label.to_string(),
+                scatter: pts,
+                ..Default::default()
+            });
+        }
+        if panels.is_empty() {
+            continue;
+        }
+        std::fs::create_dir_all(&plot_dir).map_err(|e| io(&plot_dir, e))?;
+        let stem = format!(
+            "metrics_vs_{}",
+            path.chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                .collect::<String>()
+        );
+        write_figure(
+            &Figure {
+                stem: stem.clone(),
+                panels,
+                columns: 3,
+            },
+            &plot_dir,
+        )
+        .map_err(|e| io(Path::new(&e.path), std::io::Error::other(e.message)))?;
+        out.push((path.clone(), stem));
+    }
+    Ok(out)
 }
 
 /// The metrics the report's table shows, per robot, when present.
