@@ -6,6 +6,7 @@ pub mod bench;
 pub mod dynamics;
 pub mod export;
 pub mod models;
+pub mod optimize;
 pub mod replay;
 pub mod report;
 pub mod run;
@@ -48,6 +49,8 @@ pub enum Command {
     Sweep(sweep::SweepArgs),
     /// Join the results of a sweep's shards.
     Merge(sweep::MergeArgs),
+    /// Optimise scenario values by CMA-ES (`kind = "optimize"` study files).
+    Optimize(optimize::OptimizeArgs),
 }
 
 /// Runs the parsed command line.
@@ -65,5 +68,6 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Bench(a) => bench::run(a),
         Command::Sweep(a) => sweep::sweep(a),
         Command::Merge(a) => sweep::merge(a),
+        Command::Optimize(a) => optimize::run(a),
     }
 }

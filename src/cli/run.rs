@@ -154,6 +154,18 @@ pub fn check(a: CheckArgs) -> Result<(), CliError> {
         .ok()
         .and_then(|s| crate::study::file_kind(&s))
     {
+        if kind == "optimize" {
+            let opt =
+                crate::study::optimize::load_optimization(&a.scenario).map_err(scenario_error)?;
+            println!(
+                "{}: ok (study, kind = \"optimize\", {} parameters of {}, budget {})",
+                a.scenario.display(),
+                opt.params.len(),
+                opt.base_path.display(),
+                opt.file.optimize.budget
+            );
+            return Ok(());
+        }
         let study = crate::study::load_study(&a.scenario).map_err(scenario_error)?;
         println!(
             "{}: ok (study, kind = \"{kind}\", {} variants of {})",
@@ -632,6 +644,7 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
     };
     let o = v.as_object_mut().expect("object");
     o.insert("total_mass_kg".into(), json!(r.model.total_mass));
+    o.insert("commanded_speed_mps".into(), json!(command));
     o.insert(
         "actuators".into(),
         json!({

@@ -108,7 +108,8 @@ pub fn parse_scenario(path: &Path, src: String) -> Result<Scenario, ScenarioErro
         return Err(loc.at(
             "kind",
             format!(
-                "this is a study file (kind = \"{kind}\"), not a scenario: run it with `quadsim sweep {}`",
+                "this is a study file (kind = \"{kind}\"), not a scenario: run it with `quadsim {} {}`",
+                if kind == "optimize" { "optimize" } else { "sweep" },
                 path.display()
             ),
         ));

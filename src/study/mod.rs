@@ -19,6 +19,7 @@
 //! and a merge of all shards give the same rows as one whole run.
 
 pub mod analysis;
+pub mod optimize;
 pub mod output;
 pub mod sample;
 
@@ -124,8 +125,7 @@ pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
         "optimize" => {
             return Err(loc.at(
                 "kind",
-                "optimisation studies are not available yet (README, \"Status\"); \
-                 kind = \"sweep\" runs a sweep",
+                "this is an optimisation study: run it with `quadsim optimize`",
             ));
         }
         other => {
@@ -222,13 +222,21 @@ fn check_path(
     Ok(())
 }
 
-/// The scenario text of variant `k`: the base with the variant's values set.
-pub fn variant_source(study: &Study, k: usize) -> Result<String, String> {
-    let mut t: toml::Table = toml::from_str(&study.base_source).map_err(|e| e.to_string())?;
-    for (p, v) in &study.variants[k] {
+/// The base scenario's text with `values` set at their paths.
+pub fn with_values(
+    base_source: &str,
+    values: &BTreeMap<String, toml::Value>,
+) -> Result<String, String> {
+    let mut t: toml::Table = toml::from_str(base_source).map_err(|e| e.to_string())?;
+    for (p, v) in values {
         set_path(&mut t, p, v.clone())?;
     }
     toml::to_string(&t).map_err(|e| e.to_string())
+}
+
+/// The scenario text of variant `k`: the base with the variant's values set.
+pub fn variant_source(study: &Study, k: usize) -> Result<String, String> {
+    with_values(&study.base_source, &study.variants[k])
 }
 
 /// One variant's outcome.
@@ -242,29 +250,34 @@ pub struct VariantResult {
     pub outcome: Result<Value, String>,
 }
 
+/// Runs a scenario text (relative paths resolved from `base_path`) to the
+/// end on one thread; `summary.json` without `timing`, or the error that
+/// stopped it (a divergence is an error).
+pub fn run_source(base_path: &Path, src: String, duration_s: Option<f64>) -> Result<Value, String> {
+    let scn = parse_scenario(base_path, src).map_err(|e| e.message_with_path())?;
+    let mut world = crate::world::build_world(
+        &scn,
+        crate::world::Overrides {
+            duration_s,
+            threads: 1,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| e.message_with_path())?;
+    for _ in 0..world.steps {
+        world.sim.step();
+        crate::cli::run::check_finite(&world).map_err(|e| e.to_string())?;
+    }
+    let mut s = crate::cli::run::summary_json(&scn, &world, 0.0, 1);
+    s.as_object_mut().expect("object").remove("timing");
+    Ok(s)
+}
+
 /// Runs variant `k` to the end on one thread (errors are recorded, not raised).
 pub fn run_variant(study: &Study, k: usize) -> VariantResult {
     let params = study.variants[k].clone();
-    let outcome = (|| {
-        let src = variant_source(study, k)?;
-        let scn = parse_scenario(&study.base_path, src).map_err(|e| e.message_with_path())?;
-        let mut world = crate::world::build_world(
-            &scn,
-            crate::world::Overrides {
-                duration_s: study.file.duration_s,
-                threads: 1,
-                ..Default::default()
-            },
-        )
-        .map_err(|e| e.message_with_path())?;
-        for _ in 0..world.steps {
-            world.sim.step();
-            crate::cli::run::check_finite(&world).map_err(|e| e.to_string())?;
-        }
-        let mut s = crate::cli::run::summary_json(&scn, &world, 0.0, 1);
-        s.as_object_mut().expect("object").remove("timing");
-        Ok(s)
-    })();
+    let outcome = variant_source(study, k)
+        .and_then(|src| run_source(&study.base_path, src, study.file.duration_s));
     VariantResult {
         index: k,
         params,
