@@ -64,6 +64,22 @@ pub struct Data {
     pub scratch_v: Vec<f64>,
     /// Scratch of length nv × nv (factorisations).
     pub scratch_vv: Vec<f64>,
+    /// What the kinematic fields (`origin`, `pose`, `s`, `s_base`,
+    /// `inertia_ref`, `vel`) were computed for, so that a repeated call at
+    /// the same state (observation, then the integrator's first stage) is
+    /// skipped: see [`crate::kinematics::forward_kinematics`].
+    pub(crate) kin: KinematicsKey,
+}
+
+/// The state the kinematic fields of a [`Data`] hold: the model's address,
+/// q and v bit for bit, and whether velocities were computed.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct KinematicsKey {
+    pub(crate) model: usize,
+    pub(crate) q: Vec<f64>,
+    pub(crate) v: Vec<f64>,
+    /// 0: nothing valid; 1: poses for `q`; 2: poses for `q` and velocities for `v`.
+    pub(crate) level: u8,
 }
 
 impl Data {
@@ -95,7 +111,18 @@ impl Data {
             jacobian: vec![0.0; 3 * nv],
             scratch_v: vec![0.0; nv],
             scratch_vv: vec![0.0; nv * nv],
+            kin: KinematicsKey {
+                model: 0,
+                q: vec![0.0; model.nq],
+                v: vec![0.0; nv],
+                level: 0,
+            },
         }
+    }
+
+    /// Forgets which state the kinematic fields hold (after writing them by hand).
+    pub fn invalidate_kinematics(&mut self) {
+        self.kin.level = 0;
     }
 
     /// Clears every external force.

@@ -197,6 +197,7 @@ impl Schema {
                     },
                     "push_recovery": {"type": "object", "description": "Optional: largest push impulse recovered from"},
                     "total_mass_kg": {"type": "number", "description": "the robot's mass with its payloads at the end (kg)"},
+                    "commanded_speed_mps": {"type": ["number", "null"], "description": "a walking robot's commanded forward speed as ramped, averaged over the run (m/s); null for other controllers"},
                     "actuators": {"type": "object", "description": "per-joint load: peak_torque_nm, peak_torque_share (of the effort limit), time_at_torque_limit_s, time_at_speed_limit_s; and their maxima over the joints"},
                     "load": {"type": "object", "description": "load verdict: carried (bool) and reason (null, fell, saturated, failed to track speed)"},
                 }),
