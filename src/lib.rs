@@ -11,6 +11,7 @@ pub mod heightmap;
 pub mod log;
 pub mod mem;
 pub mod model_source;
+pub mod monitor;
 pub mod scenario;
 pub mod study;
 pub mod terrain_spec;

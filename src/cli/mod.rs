@@ -6,6 +6,7 @@ pub mod bench;
 pub mod dynamics;
 pub mod export;
 pub mod models;
+pub mod monitor;
 pub mod report;
 pub mod run;
 pub mod sweep;
@@ -45,6 +46,8 @@ pub enum Command {
     Sweep(sweep::SweepArgs),
     /// Join the results of a sweep's shards.
     Merge(sweep::MergeArgs),
+    /// Watch a running world live (shared memory): `--frames N` prints N plain lines.
+    Monitor(monitor::MonitorArgs),
 }
 
 /// Runs the parsed command line.
@@ -61,5 +64,6 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Bench(a) => bench::run(a),
         Command::Sweep(a) => sweep::sweep(a),
         Command::Merge(a) => sweep::merge(a),
+        Command::Monitor(a) => monitor::run(a),
     }
 }

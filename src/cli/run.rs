@@ -43,6 +43,15 @@ pub struct RunArgs {
     /// overriding `world.log_rate_hz` (default: the controller rate).
     #[arg(long, value_name = "HZ|full")]
     pub log_rate: Option<String>,
+    /// Do not publish live frames over shared memory (see `quadsim monitor`).
+    #[arg(long)]
+    pub no_monitor: bool,
+    /// Publish live frames every N steps (default: the controller period).
+    #[arg(long, value_name = "N")]
+    pub monitor_every: Option<u64>,
+    /// The world's name for `quadsim monitor` (default `<scenario>-<pid>`).
+    #[arg(long)]
+    pub world_name: Option<String>,
 }
 
 /// Arguments of `quadsim check`.
@@ -221,6 +230,45 @@ fn log_every_steps(a: &RunArgs, scn: &Scenario) -> Result<u64, CliError> {
     })
 }
 
+/// Starts the live monitor unless `--no-monitor`; shared memory that cannot
+/// be used is a warning, not an error (the run goes on unmonitored).
+fn start_monitor(
+    a: &RunArgs,
+    scn: &Scenario,
+    world: &mut World,
+) -> Result<Option<crate::monitor::RunMonitor>, CliError> {
+    if a.no_monitor {
+        return Ok(None);
+    }
+    let every = match a.monitor_every {
+        Some(0) => return Err(bad("--monitor-every: must be ≥ 1 (steps)")),
+        Some(n) => n,
+        None => world
+            .sim
+            .world
+            .get_resource::<quadsim_components::ControlRate>()
+            .map_or(1, |c| c.every_steps.max(1)),
+    };
+    let name = a
+        .world_name
+        .clone()
+        .unwrap_or_else(|| crate::monitor::default_world_name(&scn.name));
+    let robots: Vec<_> = world.robots.iter().map(|(_, e)| *e).collect();
+    match crate::monitor::RunMonitor::start(&mut world.sim.world, &name, &robots, world.dt_s, every)
+    {
+        Ok(m) => {
+            if !a.quiet {
+                eprintln!("monitor: world '{name}' (quadsim monitor --world {name})");
+            }
+            Ok(Some(m))
+        }
+        Err(e) => {
+            eprintln!("warning: {e}; running without live monitoring");
+            Ok(None)
+        }
+    }
+}
+
 /// Largest base or joint speed before a run counts as diverged (m/s for the
 /// base's linear velocity, rad/s for angular and joint velocities).
 pub const DIVERGED_LINEAR_SPEED_MPS: f64 = 100.0;
@@ -296,6 +344,7 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         let path = out_dir.join(crate::log::LOG_FILE);
         Some(crate::log::start_run_log(&scn, &mut world, &path, every)?)
     };
+    let monitor = start_monitor(a, &scn, &mut world)?;
     crate::log::interrupt::arm().map_err(bad)?;
     let start = Instant::now();
     let chunk = (world.steps / 200).max(1);
@@ -324,12 +373,17 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         Some(log) => Some(log.finish(&mut world, &outcome)?),
         None => None,
     };
+    let monitor_stats = monitor.map(|m| m.finish(&mut world.sim.world));
     if let Some(d) = outcome.diverged {
         return Err(CliError::Diverged(d));
     }
     let mut summary = summary_json(&scn, &world, wall, a.threads);
     if outcome.interrupted {
         summary["interrupted"] = json!(true);
+    }
+    if let Some(m) = &monitor_stats {
+        summary["timing"]["monitor_published"] = json!(m.published());
+        summary["timing"]["monitor_dropped"] = json!(m.dropped());
     }
     let path = out_dir.join("summary.json");
     std::fs::write(

@@ -1,0 +1,110 @@
+//! The frame layout documented in docs/monitor.md is the compiled one: every
+//! row's byte offset and size equal `offset_of!` and `size_of_val`, no field
+//! is missing, and the C header (examples/quadsim_frame.h) agrees too.
+
+use std::mem::{offset_of, size_of};
+
+use quadsim::monitor::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
+
+/// (field, byte offset, size in bytes) of every field, in declaration order.
+fn rust_layout() -> Vec<(&'static str, usize, usize)> {
+    let f = RobotFrame::default();
+    macro_rules! row {
+        ($name:ident) => {
+            (
+                stringify!($name),
+                offset_of!(RobotFrame, $name),
+                std::mem::size_of_val(&f.$name),
+            )
+        };
+    }
+    vec![
+        row!(layout_version),
+        row!(robot_index),
+        row!(tick),
+        row!(time_s),
+        row!(n_dof),
+        row!(n_feet),
+        row!(contact_flags),
+        row!(slip_flags),
+        row!(base_position_m),
+        row!(base_orientation_xyzw),
+        row!(base_linear_mps),
+        row!(base_angular_radps),
+        row!(rpy_rad),
+        row!(com_m),
+        row!(com_velocity_mps),
+        row!(joint_q_rad),
+        row!(joint_qd_radps),
+        row!(joint_q_desired_rad),
+        row!(joint_qd_desired_radps),
+        row!(joint_tau_nm),
+        row!(joint_tau_desired_nm),
+        row!(foot_force_n),
+        row!(gait_phase),
+    ]
+}
+
+/// Size of a documented type: `u32`, `u64`, `f64`, `f64[3]`, `f64[4][3]`.
+fn type_size(t: &str) -> usize {
+    let t = t.trim().trim_matches('`');
+    let (base, dims) = t.split_once('[').map_or((t, ""), |(b, d)| (b, d));
+    let scalar = match base {
+        "u32" => 4,
+        "u64" | "f64" => 8,
+        other => panic!("unknown type '{other}' in docs/monitor.md"),
+    };
+    dims.split('[')
+        .map(|d| d.trim_end_matches(']'))
+        .filter(|d| !d.is_empty())
+        .map(|d| d.parse::<usize>().expect("array length"))
+        .product::<usize>()
+        * scalar
+}
+
+/// Rows `| offset | field | type | … |` of the layout table in docs/monitor.md.
+fn doc_layout() -> Vec<(String, usize, usize)> {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/monitor.md"))
+        .expect("docs/monitor.md");
+    text.lines()
+        .filter_map(|l| {
+            let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+            if cells.len() < 5 {
+                return None;
+            }
+            let offset = cells[1].parse::<usize>().ok()?;
+            let name = cells[2].trim_matches('`').to_string();
+            Some((name, offset, type_size(cells[3])))
+        })
+        .collect()
+}
+
+#[test]
+fn documented_layout_is_the_compiled_layout() {
+    let rust = rust_layout();
+    let doc = doc_layout();
+    let actual: Vec<String> = rust
+        .iter()
+        .map(|(n, o, s)| format!("{o} {n} {s}"))
+        .collect();
+    let documented: Vec<String> = doc.iter().map(|(n, o, s)| format!("{o} {n} {s}")).collect();
+    assert_eq!(
+        documented, actual,
+        "docs/monitor.md's table (offset field size) differs from RobotFrame"
+    );
+    // fields tile the struct without padding, and the documented size is right
+    let end = rust.last().map(|(_, o, s)| o + s).unwrap();
+    assert_eq!(end, size_of::<RobotFrame>());
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/monitor.md")).unwrap();
+    assert!(
+        text.contains(&format!("{} bytes", size_of::<RobotFrame>())),
+        "docs/monitor.md states the frame size"
+    );
+    for w in rust.windows(2) {
+        assert_eq!(w[0].1 + w[0].2, w[1].1, "padding before {}", w[1].0);
+    }
+    assert_eq!(std::mem::align_of::<RobotFrame>(), 8);
+    assert!(TYPE_NAME.ends_with(&format!(".v{LAYOUT_VERSION}")));
+    assert_eq!((MAX_DOF, MAX_FEET), (24, 4), "docs/monitor.md's sizes");
+}
