@@ -254,8 +254,14 @@ fn start_monitor(
         .clone()
         .unwrap_or_else(|| crate::monitor::default_world_name(&scn.name));
     let robots: Vec<_> = world.robots.iter().map(|(_, e)| *e).collect();
-    match crate::monitor::RunMonitor::start(&mut world.sim.world, &name, &robots, world.dt_s, every)
-    {
+    let models = scn
+        .file
+        .robots
+        .iter()
+        .map(|r| (r.name.clone(), r.model.clone()))
+        .collect();
+    let (sim, dt_s) = (&mut world.sim.world, world.dt_s);
+    match crate::monitor::RunMonitor::start(sim, &name, &robots, models, dt_s, every) {
         Ok(m) => {
             if !a.quiet {
                 eprintln!("monitor: world '{name}' (quadsim monitor --world {name})");

@@ -89,16 +89,18 @@ pub struct RunMonitor {
 }
 
 impl RunMonitor {
-    /// Starts publishing `robots` of `world` every `every_steps` steps.
+    /// Starts publishing `robots` of `world` every `every_steps` steps;
+    /// `models` names each robot's model by instance name for the header.
     /// Errors (no shared memory, a name in use) leave the world untouched.
     pub fn start(
         sim: &mut bevy_ecs::world::World,
         world: &str,
         robots: &[Entity],
+        models: Vec<(String, String)>,
         dt_s: f64,
         every_steps: u64,
     ) -> Result<Self, MonitorError> {
-        let publisher = FramePublisher::create(world, robots.len(), dt_s, every_steps)?;
+        let publisher = FramePublisher::create(world, robots.len(), dt_s, every_steps, models)?;
         let stats = publisher.stats();
         let followed: Vec<(Entity, bool)> = robots.iter().map(|&e| (e, true)).collect();
         quadsim_systems::start_sampling::<quadsim_systems::MonitorChannel>(

@@ -49,6 +49,8 @@ pub struct FramePublisher {
     world: String,
     dt_s: f64,
     every_steps: u64,
+    /// Model of each robot by instance name (the scenario's `robots[].model`).
+    models: Vec<(String, String)>,
     stats: Arc<MonitorStats>,
 }
 
@@ -69,6 +71,7 @@ impl FramePublisher {
         n_robots: usize,
         dt_s: f64,
         every_steps: u64,
+        models: Vec<(String, String)>,
     ) -> Result<Self, MonitorError> {
         let fail = |what: &str, e: &dyn std::fmt::Debug| MonitorError {
             message: format!("world '{world}': {what}: {e:?}"),
@@ -80,6 +83,23 @@ impl FramePublisher {
             .create::<Svc>()
             .map_err(|e| fail("cannot create an iceoryx2 node", &e))?;
         cleanup_dead_nodes::<Svc>();
+        // the header first: a reader that sees the frames service finds it
+        let header_name = service_name(&header_service(world))?;
+        let header = node
+            .service_builder(&header_name)
+            .publish_subscribe::<[u8]>()
+            .max_publishers(1)
+            .max_subscribers(MAX_SUBSCRIBERS)
+            .subscriber_max_buffer_size(2)
+            .history_size(1)
+            .enable_safe_overflow(true)
+            .create()
+            .map_err(|e| fail("cannot create the header service", &e))?
+            .publisher_builder()
+            .initial_max_slice_len(4096)
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
+            .create()
+            .map_err(|e| fail("cannot create the header publisher", &e))?;
         let frames_name = service_name(&frames_service(world))?;
         let frames = node
             .service_builder(&frames_name)
@@ -97,22 +117,6 @@ impl FramePublisher {
             .max_loaned_samples(1)
             .create()
             .map_err(|e| fail("cannot create the frames publisher", &e))?;
-        let header_name = service_name(&header_service(world))?;
-        let header = node
-            .service_builder(&header_name)
-            .publish_subscribe::<[u8]>()
-            .max_publishers(1)
-            .max_subscribers(MAX_SUBSCRIBERS)
-            .subscriber_max_buffer_size(2)
-            .history_size(1)
-            .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| fail("cannot create the header service", &e))?
-            .publisher_builder()
-            .initial_max_slice_len(4096)
-            .allocation_strategy(AllocationStrategy::PowerOfTwo)
-            .create()
-            .map_err(|e| fail("cannot create the header publisher", &e))?;
         Ok(Self {
             frames,
             header,
@@ -120,6 +124,7 @@ impl FramePublisher {
             world: world.to_string(),
             dt_s,
             every_steps,
+            models,
             stats: Arc::default(),
         })
     }
@@ -161,7 +166,8 @@ impl FramePublisher {
             "robots": robots.iter().enumerate().map(|(i, r)| json!({
                 "index": i,
                 "name": r.name,
-                "model": r.model.name,
+                "model": self.models.iter().find(|(n, _)| n == &r.name)
+                    .map_or(r.model.name.as_str(), |(_, m)| m.as_str()),
                 "dof": r.model.nv - r.model.base_nv(),
                 "joints": r.joint_names(),
                 "feet": r.foot_names(),

@@ -87,13 +87,20 @@ impl FrameReader {
                 });
             }
         };
-        let header = node
+        let header = match node
             .service_builder(&service_name(&header_service(world))?)
             .publish_subscribe::<[u8]>()
             .open()
-            .map_err(|e| MonitorError {
-                message: format!("cannot open the header of world '{world}': {e:?}"),
-            })?;
+        {
+            Ok(s) => s,
+            // the run is between creating its two services, or ending
+            Err(PublishSubscribeOpenError::DoesNotExist) => return Ok(None),
+            Err(e) => {
+                return Err(MonitorError {
+                    message: format!("cannot open the header of world '{world}': {e:?}"),
+                });
+            }
+        };
         let frames = frames
             .subscriber_builder()
             .create()
