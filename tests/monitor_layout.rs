@@ -4,7 +4,7 @@
 
 use std::mem::{offset_of, size_of};
 
-use quadsim::monitor::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
+use quadsim::monitor::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotCommand, RobotFrame, TYPE_NAME};
 
 /// (field, byte offset, size in bytes) of every field, in declaration order.
 fn rust_layout() -> Vec<(&'static str, usize, usize)> {
@@ -62,11 +62,17 @@ fn type_size(t: &str) -> usize {
         * scalar
 }
 
-/// Rows `| offset | field | type | … |` of the layout table in docs/monitor.md.
-fn doc_layout() -> Vec<(String, usize, usize)> {
+/// Rows `| offset | field | type | … |` of the layout table under the
+/// heading starting with `heading` in docs/monitor.md.
+fn doc_layout(heading: &str) -> Vec<(String, usize, usize)> {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/monitor.md"))
         .expect("docs/monitor.md");
-    text.lines()
+    let section = text
+        .split("\n## ")
+        .find(|s| s.starts_with(heading))
+        .unwrap_or_else(|| panic!("docs/monitor.md has no section '{heading}'"));
+    section
+        .lines()
         .filter_map(|l| {
             let cells: Vec<&str> = l.split('|').map(str::trim).collect();
             if cells.len() < 5 {
@@ -82,7 +88,7 @@ fn doc_layout() -> Vec<(String, usize, usize)> {
 #[test]
 fn documented_layout_is_the_compiled_layout() {
     let rust = rust_layout();
-    let doc = doc_layout();
+    let doc = doc_layout("`RobotFrame` layout");
     let actual: Vec<String> = rust
         .iter()
         .map(|(n, o, s)| format!("{o} {n} {s}"))
@@ -107,4 +113,45 @@ fn documented_layout_is_the_compiled_layout() {
     assert_eq!(std::mem::align_of::<RobotFrame>(), 8);
     assert!(TYPE_NAME.ends_with(&format!(".v{LAYOUT_VERSION}")));
     assert_eq!((MAX_DOF, MAX_FEET), (24, 4), "docs/monitor.md's sizes");
+}
+
+#[test]
+fn documented_command_layout_is_the_compiled_layout() {
+    let c = RobotCommand::default();
+    macro_rules! row {
+        ($name:ident) => {
+            format!(
+                "{} {} {}",
+                offset_of!(RobotCommand, $name),
+                stringify!($name),
+                std::mem::size_of_val(&c.$name)
+            )
+        };
+    }
+    let actual = vec![
+        row!(layout_version),
+        row!(robot_index),
+        row!(tick),
+        row!(mode),
+        row!(n_dof),
+        row!(q_target_rad),
+        row!(qd_target_radps),
+        row!(kp_nm_per_rad),
+        row!(kd_nms_per_rad),
+        row!(tau_ff_nm),
+        row!(velocity),
+    ];
+    let documented: Vec<String> = doc_layout("`RobotCommand` layout")
+        .iter()
+        .map(|(n, o, s)| format!("{o} {n} {s}"))
+        .collect();
+    assert_eq!(documented, actual);
+    let last = documented.last().unwrap();
+    let mut it = last.split(' ');
+    let (o, _, s) = (it.next().unwrap(), it.next(), it.nth(0).unwrap());
+    let end = o.parse::<usize>().unwrap() + s.parse::<usize>().unwrap();
+    assert_eq!(end, size_of::<RobotCommand>(), "no tail padding");
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/monitor.md")).unwrap();
+    assert!(text.contains(&format!("{} bytes", size_of::<RobotCommand>())));
 }

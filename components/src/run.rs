@@ -20,6 +20,8 @@ pub enum Controller {
     JointPd(JointPd),
     /// Study A's walking controller: gait, VMC, force QP, swing legs.
     Walker(Box<Walker>),
+    /// Joint commands from another process (`kind = "external"`).
+    External(crate::ExternalJoint),
 }
 
 impl Controller {
@@ -29,6 +31,7 @@ impl Controller {
             Controller::None => None,
             Controller::JointPd(pd) => Some(&pd.target_rad),
             Controller::Walker(w) => Some(w.joint_targets()),
+            Controller::External(e) => Some(&e.target_rad),
         }
     }
 }

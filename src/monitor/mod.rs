@@ -3,6 +3,7 @@
 //! describing the world; `quadsim monitor` and other processes (Python, C)
 //! subscribe. See `docs/monitor.md`.
 
+pub mod command;
 pub mod frame;
 pub mod publish;
 pub mod subscribe;
@@ -13,6 +14,7 @@ use bevy_ecs::entity::Entity;
 use iceoryx2::prelude::*;
 use thiserror::Error;
 
+pub use command::{CommandReceiver, CommandSender, CommandStats, RobotCommand};
 pub use frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
 pub use publish::{FramePublisher, MonitorSink, MonitorStats};
 pub use subscribe::{FrameReader, list_worlds};
@@ -46,6 +48,11 @@ impl MonitorError {
 /// `quadsim/<world>/frames`.
 pub fn frames_service(world: &str) -> String {
     format!("{SERVICE_PREFIX}{world}/frames")
+}
+
+/// `quadsim/<world>/commands`.
+pub fn commands_service(world: &str) -> String {
+    format!("{SERVICE_PREFIX}{world}/commands")
 }
 
 /// `quadsim/<world>/header`.
@@ -86,6 +93,7 @@ pub struct RunMonitor {
     /// Steps between published instants.
     pub every_steps: u64,
     stats: Arc<MonitorStats>,
+    publisher: Arc<FramePublisher>,
 }
 
 impl RunMonitor {
@@ -102,10 +110,11 @@ impl RunMonitor {
     ) -> Result<Self, MonitorError> {
         let publisher = FramePublisher::create(world, robots.len(), dt_s, every_steps, models)?;
         let stats = publisher.stats();
+        let publisher = Arc::new(publisher);
         let followed: Vec<(Entity, bool)> = robots.iter().map(|&e| (e, true)).collect();
         quadsim_systems::start_sampling::<quadsim_systems::MonitorChannel>(
             sim,
-            Box::new(MonitorSink::new(publisher)),
+            Box::new(MonitorSink::new(publisher.clone())),
             every_steps,
             &followed,
         );
@@ -113,12 +122,19 @@ impl RunMonitor {
             world: world.to_string(),
             every_steps,
             stats,
+            publisher,
         })
+    }
+
+    /// Serves subscribers that came since the last publish tick.
+    pub fn refresh(&self) {
+        self.publisher.refresh();
     }
 
     /// Stops publishing (no final sample: the log's final sample runs the
     /// controllers once more, which must happen once) and removes the services.
     pub fn finish(self, sim: &mut bevy_ecs::world::World) -> Arc<MonitorStats> {
+        drop(self.publisher);
         drop(quadsim_systems::finish_sampling::<
             quadsim_systems::MonitorChannel,
         >(sim, false));

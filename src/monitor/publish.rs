@@ -183,17 +183,24 @@ impl FramePublisher {
             self.stats.dropped.fetch_add(1, Ordering::Relaxed);
         }
     }
+
+    /// Connects subscribers that came since the last publish tick (a late
+    /// subscriber then gets the header at once, e.g. while a lockstep run
+    /// waits for its first command).
+    pub fn refresh(&self) {
+        let _ = self.header.update_connections();
+    }
 }
 
 /// The monitor channel's sink (see [`quadsim_systems::MonitorChannel`]).
 #[derive(Debug)]
 pub struct MonitorSink {
-    publisher: FramePublisher,
+    publisher: Arc<FramePublisher>,
 }
 
 impl MonitorSink {
     /// A sink publishing through `publisher`.
-    pub fn new(publisher: FramePublisher) -> Self {
+    pub fn new(publisher: Arc<FramePublisher>) -> Self {
         Self { publisher }
     }
 }

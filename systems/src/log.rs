@@ -584,7 +584,10 @@ fn sample_robot(
         Controller::None => None,
         c => c.joint_targets().map(<[f64]>::to_vec),
     };
-    let velocity_targets = targets.as_ref().map(|t| vec![0.0; t.len()]);
+    let velocity_targets = match &sim.run.controller {
+        Controller::External(e) => Some(e.target_radps.clone()),
+        _ => targets.as_ref().map(|t| vec![0.0; t.len()]),
+    };
     let walker = match &sim.run.controller {
         Controller::Walker(w) => Some(w),
         _ => None,
