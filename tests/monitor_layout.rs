@@ -148,7 +148,7 @@ fn documented_command_layout_is_the_compiled_layout() {
     assert_eq!(documented, actual);
     let last = documented.last().unwrap();
     let mut it = last.split(' ');
-    let (o, _, s) = (it.next().unwrap(), it.next(), it.nth(0).unwrap());
+    let (o, _, s) = (it.next().unwrap(), it.next(), it.next().unwrap());
     let end = o.parse::<usize>().unwrap() + s.parse::<usize>().unwrap();
     assert_eq!(end, size_of::<RobotCommand>(), "no tail padding");
     let text =

@@ -168,7 +168,10 @@ mod tests {
                 };
                 let slow = parent.rot * DMat3::from_axis_angle(axis, angle);
                 assert!(
-                    (fast - slow).to_cols_array().iter().all(|e| e.abs() < 1e-15),
+                    (fast - slow)
+                        .to_cols_array()
+                        .iter()
+                        .all(|e| e.abs() < 1e-15),
                     "axis {axis} angle {angle}"
                 );
             }
