@@ -1,6 +1,7 @@
-//! The frame layout documented in docs/monitor.md is the compiled one: every
-//! row's byte offset and size equal `offset_of!` and `size_of_val`, no field
-//! is missing, and the C header (examples/quadsim_frame.h) agrees too.
+//! The frame and command layouts documented in docs/monitor.md are the
+//! compiled ones: every row's byte offset and size equal `offset_of!` and
+//! `size_of_val`, no field is missing; and the C header
+//! (examples/quadsim_frame.h), compiled with gcc, agrees field by field.
 
 use std::mem::{offset_of, size_of};
 
@@ -154,4 +155,69 @@ fn documented_command_layout_is_the_compiled_layout() {
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/monitor.md")).unwrap();
     assert!(text.contains(&format!("{} bytes", size_of::<RobotCommand>())));
+}
+
+/// `"<c struct>.<field> <offset> <size>"` lines of the Rust structs, as
+/// examples/check_frame_layout.c prints them for the C header.
+fn rust_c_lines() -> Vec<String> {
+    let mut out: Vec<String> = rust_layout()
+        .iter()
+        .map(|(n, o, s)| format!("quadsim_robot_frame.{n} {o} {s}"))
+        .collect();
+    out.push(format!("quadsim_robot_frame {}", size_of::<RobotFrame>()));
+    let c = RobotCommand::default();
+    macro_rules! row {
+        ($name:ident) => {
+            out.push(format!(
+                "quadsim_robot_command.{} {} {}",
+                stringify!($name),
+                offset_of!(RobotCommand, $name),
+                std::mem::size_of_val(&c.$name)
+            ))
+        };
+    }
+    row!(layout_version);
+    row!(robot_index);
+    row!(tick);
+    row!(mode);
+    row!(n_dof);
+    row!(q_target_rad);
+    row!(qd_target_radps);
+    row!(kp_nm_per_rad);
+    row!(kd_nms_per_rad);
+    row!(tau_ff_nm);
+    row!(velocity);
+    out.push(format!(
+        "quadsim_robot_command {}",
+        size_of::<RobotCommand>()
+    ));
+    out
+}
+
+#[test]
+fn c_header_matches_the_rust_structs() {
+    let dir = std::env::temp_dir().join(format!("quadsim-c-header-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exe = dir.join("check_frame_layout");
+    let src = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/check_frame_layout.c");
+    let status = std::process::Command::new("gcc")
+        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-o"])
+        .arg(&exe)
+        .arg(src)
+        .status()
+        .expect("gcc must be installed to check examples/quadsim_frame.h");
+    assert!(status.success(), "gcc failed on {src}");
+    let out = std::process::Command::new(&exe).output().unwrap();
+    assert!(out.status.success());
+    let c: Vec<String> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    assert_eq!(
+        c,
+        rust_c_lines(),
+        "examples/quadsim_frame.h differs from Rust"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
