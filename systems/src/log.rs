@@ -153,7 +153,8 @@ pub struct RobotSample {
     /// Every link frame (one per `model.frames` entry) in its parent frame
     /// ([`frame_parents`]; the world for the base link): translation (m) and
     /// rotation, exact from the joint angles, so fixed offsets and the zero
-    /// components of one-axis rotations are exactly constant.
+    /// components of one-axis rotations are exactly constant. Empty for a
+    /// channel without them ([`SampleChannel::LINK_TRANSFORMS`]).
     pub link_transforms: Vec<(DVec3, DQuat)>,
 }
 
@@ -275,7 +276,11 @@ struct Followed {
 /// ([`LogChannel`]) and e.g. the live monitor. Each channel has its own
 /// [`Logger`] resource, rate and snapshot, so one never changes what the
 /// other samples or when.
-pub trait SampleChannel: Send + Sync + 'static {}
+pub trait SampleChannel: Send + Sync + 'static {
+    /// Whether samples carry [`RobotSample::link_transforms`] (the log's
+    /// `/tf`); a channel without a use for them skips their cost.
+    const LINK_TRANSFORMS: bool = true;
+}
 
 /// The run's log (`log.mcap`).
 #[derive(Debug, Clone, Copy, Default)]
@@ -286,7 +291,10 @@ impl SampleChannel for LogChannel {}
 /// memory, docs/monitor.md). Sampled after the log in the `Publish` stage.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct MonitorChannel;
-impl SampleChannel for MonitorChannel {}
+impl SampleChannel for MonitorChannel {
+    /// Frames carry no link transforms.
+    const LINK_TRANSFORMS: bool = false;
+}
 
 /// The logging resource: which robots, how often, and the sink. Present only
 /// while a log is being written ([`start_logging`] … [`finish_logging`], or
@@ -523,7 +531,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             &r.v,
             data,
             &mut r.evals,
-            &r.parents,
+            C::LINK_TRANSFORMS.then_some(&r.parents[..]),
         ));
     }
     logger.last_sampled = Some(j);
@@ -548,7 +556,7 @@ fn sample_robot(
     v: &[f64],
     data: &mut Data,
     evals: &mut Vec<ContactEval>,
-    parents: &[Option<usize>],
+    parents: Option<&[Option<usize>]>,
 ) -> RobotSample {
     let model = &sim.model;
     forward_kinematics(model, data, q, v);
@@ -651,6 +659,8 @@ fn sample_robot(
         joint_velocity_desired: velocity_targets,
         feet,
         virtual_wrench,
-        link_transforms: link_transforms(model, data, q, base_orientation, parents),
+        link_transforms: parents.map_or_else(Vec::new, |p| {
+            link_transforms(model, data, q, base_orientation, p)
+        }),
     }
 }
