@@ -16,7 +16,8 @@ pub struct MonitorArgs {
     /// Only this robot (its scenario name).
     #[arg(long)]
     pub robot: Option<String>,
-    /// Print this many instants as plain lines and exit (for scripts).
+    /// Print this many instants as plain lines and exit (for scripts);
+    /// without it, lines stream until the world ends.
     #[arg(long, value_name = "N")]
     pub frames: Option<u64>,
     /// Seconds to wait for the world to appear, and for each instant.
