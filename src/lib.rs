@@ -13,6 +13,7 @@ pub mod log;
 pub mod mem;
 pub mod model_source;
 pub mod report;
+pub mod monitor;
 pub mod scenario;
 pub mod study;
 pub mod terrain_spec;

@@ -514,6 +514,10 @@ fn controller(
     let get = |k: &str, d: f64| c.params.get(k).and_then(as_f64).unwrap_or(d);
     match c.kind.as_deref().unwrap_or("none") {
         "none" => Ok(Controller::None),
+        // joint commands from another process (docs/monitor.md)
+        "external" => Ok(Controller::External(
+            quadsim_components::ExternalJoint::idle(&q[model.base_nq()..]),
+        )),
         "joint_pd" => {
             let nj = model.nv - 6;
             let ff = match c

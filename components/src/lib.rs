@@ -42,6 +42,7 @@
 
 mod build;
 mod collider;
+mod external;
 mod forces;
 mod joint;
 mod link;
@@ -55,6 +56,7 @@ pub use build::{
     spawn_link, spawn_robot, spawn_robot_with_base,
 };
 pub use collider::{Collider, ColliderOf, LinkColliders, LinkVisuals, Visual, VisualOf};
+pub use external::ExternalJoint;
 pub use forces::{ContactForces, Ground, Push, Terrain};
 pub use joint::{
     EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,

@@ -24,6 +24,8 @@ pub enum Controller {
     Walker(Box<Walker>),
     /// Study B's prescribed trot (joint angles from foot-trajectory IK).
     Prescribed(Box<PrescribedRun>),
+    /// Joint commands from another process (`kind = "external"`).
+    External(crate::ExternalJoint),
 }
 
 /// The `prescribed` controller with its run bookkeeping.
@@ -67,6 +69,7 @@ impl Controller {
             Controller::JointPd(pd) => Some(&pd.target_rad),
             Controller::Walker(w) => Some(w.joint_targets()),
             Controller::Prescribed(p) => Some(p.controller.q_ref()),
+            Controller::External(e) => Some(&e.target_rad),
         }
     }
 }

@@ -8,6 +8,7 @@ pub mod export;
 pub mod models;
 pub mod optimize;
 pub mod replay;
+pub mod monitor;
 pub mod report;
 pub mod run;
 pub mod sweep;
@@ -51,6 +52,8 @@ pub enum Command {
     Merge(sweep::MergeArgs),
     /// Optimise scenario values by CMA-ES (`kind = "optimize"` study files).
     Optimize(optimize::OptimizeArgs),
+    /// Watch a running world live (shared memory): `--frames N` prints N plain lines.
+    Monitor(monitor::MonitorArgs),
 }
 
 /// Runs the parsed command line.
@@ -69,5 +72,6 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Sweep(a) => sweep::sweep(a),
         Command::Merge(a) => sweep::merge(a),
         Command::Optimize(a) => optimize::run(a),
+        Command::Monitor(a) => monitor::run(a),
     }
 }

@@ -51,6 +51,22 @@ pub struct RunArgs {
     /// Write no `report.md` and `plots/` (for batch runs).
     #[arg(long)]
     pub no_report: bool,
+    /// Do not publish live frames over shared memory (see `quadsim monitor`).
+    #[arg(long)]
+    pub no_monitor: bool,
+    /// Publish live frames every N steps (default: the controller period).
+    #[arg(long, value_name = "N")]
+    pub monitor_every: Option<u64>,
+    /// The world's name for `quadsim monitor` (default `<scenario>-<pid>`).
+    #[arg(long)]
+    pub world_name: Option<String>,
+    /// Wait at each controller tick for the command of every robot with
+    /// `kind = "external"` (docs/monitor.md); without it the last command holds.
+    #[arg(long)]
+    pub lockstep: bool,
+    /// Seconds to wait for a lockstep command before failing the run.
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    pub lockstep_timeout: f64,
 }
 
 /// Arguments of `quadsim check`.
@@ -243,6 +259,112 @@ fn log_every_steps(a: &RunArgs, scn: &Scenario) -> Result<u64, CliError> {
     })
 }
 
+/// Starts the live monitor unless `--no-monitor`; shared memory that cannot
+/// be used is a warning, not an error (the run goes on unmonitored).
+fn start_monitor(
+    a: &RunArgs,
+    scn: &Scenario,
+    world: &mut World,
+) -> Result<Option<crate::monitor::RunMonitor>, CliError> {
+    if a.no_monitor {
+        return Ok(None);
+    }
+    let every = match a.monitor_every {
+        Some(0) => return Err(bad("--monitor-every: must be ≥ 1 (steps)")),
+        Some(n) => n,
+        None => world
+            .sim
+            .world
+            .get_resource::<quadsim_components::ControlRate>()
+            .map_or(1, |c| c.every_steps.max(1)),
+    };
+    let name = a
+        .world_name
+        .clone()
+        .unwrap_or_else(|| crate::monitor::default_world_name(&scn.name));
+    let robots: Vec<_> = world.robots.iter().map(|(_, e)| *e).collect();
+    let models = scn
+        .file
+        .robots
+        .iter()
+        .map(|r| (r.name.clone(), r.model.clone()))
+        .collect();
+    let (sim, dt_s) = (&mut world.sim.world, world.dt_s);
+    match crate::monitor::RunMonitor::start(sim, &name, &robots, models, dt_s, every) {
+        Ok(m) => {
+            if !a.quiet {
+                eprintln!("monitor: world '{name}' (quadsim monitor --world {name})");
+            }
+            Ok(Some(m))
+        }
+        Err(e) => {
+            eprintln!("warning: {e}; running without live monitoring");
+            Ok(None)
+        }
+    }
+}
+
+/// The commands service, beside the monitor; `--lockstep` needs both and
+/// an external robot, and the monitor publishing at the controller rate (a
+/// lockstep commander answers each frame).
+fn start_commands(
+    a: &RunArgs,
+    world: &World,
+    monitor: Option<&crate::monitor::RunMonitor>,
+) -> Result<Option<crate::monitor::CommandReceiver>, CliError> {
+    use quadsim_components::{ControlRate, Controller};
+    let control_every = world
+        .sim
+        .world
+        .get_resource::<ControlRate>()
+        .map_or(1, |c| c.every_steps.max(1));
+    let lockstep = if a.lockstep {
+        if !(a.lockstep_timeout.is_finite() && a.lockstep_timeout > 0.0) {
+            return Err(bad(format!(
+                "--lockstep-timeout: must be a finite time > 0 (s), got {}",
+                a.lockstep_timeout
+            )));
+        }
+        let Some(m) = monitor else {
+            return Err(bad(
+                "--lockstep: needs the live monitor (no --no-monitor, and shared memory)",
+            ));
+        };
+        if m.every_steps != control_every {
+            return Err(bad(format!(
+                "--lockstep: the monitor must publish every controller tick \
+                 (--monitor-every {control_every}), not every {} steps",
+                m.every_steps
+            )));
+        }
+        let external = world.robots.iter().any(|(_, e)| {
+            world
+                .sim
+                .robot(*e)
+                .is_some_and(|r| matches!(r.run.controller, Controller::External(_)))
+        });
+        if !external {
+            return Err(bad(
+                "--lockstep: no robot has [robots.controller] kind = \"external\"",
+            ));
+        }
+        Some(std::time::Duration::from_secs_f64(a.lockstep_timeout))
+    } else {
+        None
+    };
+    let Some(m) = monitor else {
+        return Ok(None);
+    };
+    match crate::monitor::CommandReceiver::create(&m.world, world.robots.len(), lockstep) {
+        Ok(c) => Ok(Some(c)),
+        Err(e) if lockstep.is_some() => Err(bad(e.to_string())),
+        Err(e) => {
+            eprintln!("warning: {e}; running without external commands");
+            Ok(None)
+        }
+    }
+}
+
 /// Largest base or joint speed before a run counts as diverged (m/s for the
 /// base's linear velocity, rad/s for angular and joint velocities).
 pub const DIVERGED_LINEAR_SPEED_MPS: f64 = 100.0;
@@ -326,6 +448,9 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         let path = out_dir.join(crate::log::LOG_FILE);
         Some(crate::log::start_run_log(&scn, &mut world, &path, every)?)
     };
+    let monitor = start_monitor(a, &scn, &mut world)?;
+    let mut commands = start_commands(a, &world, monitor.as_ref())?;
+    let mut command_error = None;
     crate::log::interrupt::arm().map_err(bad)?;
     let start = Instant::now();
     let chunk = (world.steps / 200).max(1);
@@ -334,6 +459,12 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     'run: while done < world.steps {
         let n = chunk.min(world.steps - done);
         for _ in 0..n {
+            if let Some(c) = &mut commands
+                && let Err(e) = c.before_step(&mut world, monitor.as_ref())
+            {
+                command_error = Some(e.to_string());
+                break 'run;
+            }
             world.sim.step();
             done += 1;
             if let Err(e) = check_finite(&world) {
@@ -354,6 +485,10 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         Some(log) => Some(log.finish(&mut world, &outcome)?),
         None => None,
     };
+    let monitor_stats = monitor.map(|m| m.finish(&mut world.sim.world));
+    if let Some(e) = command_error {
+        return Err(bad(e));
+    }
     if let Some(d) = outcome.diverged {
         return Err(CliError::Diverged(d));
     }
@@ -362,6 +497,14 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         summary["interrupted"] = json!(true);
     } else {
         add_push_searches(a, &scn, &mut summary)?;
+    }
+    if let Some(m) = &monitor_stats {
+        summary["timing"]["monitor_published"] = json!(m.published());
+        summary["timing"]["monitor_dropped"] = json!(m.dropped());
+    }
+    if let Some(c) = &commands {
+        summary["timing"]["commands_applied"] = json!(c.stats().applied);
+        summary["timing"]["commands_rejected"] = json!(c.stats().rejected);
     }
     let path = out_dir.join("summary.json");
     std::fs::write(

@@ -96,6 +96,7 @@ pub const TERRAIN_KINDS: &[(&str, &[KeySpec])] = &[
 /// Keys of each controller kind beside `kind`.
 pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
     ("none", &[]),
+    ("external", &[]),
     (
         "joint_pd",
         &[

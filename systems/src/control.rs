@@ -156,5 +156,13 @@ pub fn control_robot(sim: &mut RobotSim) {
                 &mut sim.tau_actuator[nb..],
             );
         }
+        Controller::External(e) => {
+            sim.tau_actuator[..nb].fill(0.0);
+            e.compute(
+                &sim.state.q[nq0..],
+                &sim.state.v[nv0..],
+                &mut sim.tau_actuator[nb..],
+            );
+        }
     }
 }

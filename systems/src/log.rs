@@ -153,7 +153,8 @@ pub struct RobotSample {
     /// Every link frame (one per `model.frames` entry) in its parent frame
     /// ([`frame_parents`]; the world for the base link): translation (m) and
     /// rotation, exact from the joint angles, so fixed offsets and the zero
-    /// components of one-axis rotations are exactly constant.
+    /// components of one-axis rotations are exactly constant. Empty for a
+    /// channel without them ([`SampleChannel::LINK_TRANSFORMS`]).
     pub link_transforms: Vec<(DVec3, DQuat)>,
 }
 
@@ -271,19 +272,45 @@ struct Followed {
     v: Vec<f64>,
 }
 
+/// Tells apart independent samplers of the same kind: the MCAP log
+/// ([`LogChannel`]) and e.g. the live monitor. Each channel has its own
+/// [`Logger`] resource, rate and snapshot, so one never changes what the
+/// other samples or when.
+pub trait SampleChannel: Send + Sync + 'static {
+    /// Whether samples carry [`RobotSample::link_transforms`] (the log's
+    /// `/tf`); a channel without a use for them skips their cost.
+    const LINK_TRANSFORMS: bool = true;
+}
+
+/// The run's log (`log.mcap`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LogChannel;
+impl SampleChannel for LogChannel {}
+
+/// The live monitor (the root crate publishes its samples over shared
+/// memory, docs/monitor.md). Sampled after the log in the `Publish` stage.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MonitorChannel;
+impl SampleChannel for MonitorChannel {
+    /// Frames carry no link transforms.
+    const LINK_TRANSFORMS: bool = false;
+}
+
 /// The logging resource: which robots, how often, and the sink. Present only
-/// while a log is being written ([`start_logging`] … [`finish_logging`]).
+/// while a log is being written ([`start_logging`] … [`finish_logging`], or
+/// [`start_sampling`] … [`finish_sampling`] for another channel).
 #[derive(Resource)]
-pub struct Logger {
+pub struct Logger<C: SampleChannel = LogChannel> {
     /// A sample every this many steps (≥ 1).
     pub every_steps: u64,
     robots: Vec<Followed>,
     sink: Box<dyn LogSink>,
     /// Step index of the last sample written.
     last_sampled: Option<u64>,
+    channel: std::marker::PhantomData<fn() -> C>,
 }
 
-impl std::fmt::Debug for Logger {
+impl<C: SampleChannel> std::fmt::Debug for Logger<C> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Logger")
             .field("every_steps", &self.every_steps)
@@ -307,7 +334,17 @@ pub fn start_logging(
     every_steps: u64,
     robots: &[(Entity, bool)],
 ) {
-    let mut logger = Logger {
+    start_sampling::<LogChannel>(world, sink, every_steps, robots);
+}
+
+/// [`start_logging`] for channel `C` (its own rate, snapshot and sink).
+pub fn start_sampling<C: SampleChannel>(
+    world: &mut World,
+    sink: Box<dyn LogSink>,
+    every_steps: u64,
+    robots: &[(Entity, bool)],
+) {
+    let mut logger = Logger::<C> {
         every_steps: every_steps.max(1),
         robots: robots
             .iter()
@@ -324,6 +361,7 @@ pub fn start_logging(
             .collect(),
         sink,
         last_sampled: None,
+        channel: std::marker::PhantomData,
     };
     let step = world.resource::<SimClock>().step;
     announce_if_changed(world, &mut logger, true, step);
@@ -336,9 +374,18 @@ pub fn start_logging(
 /// `Control` systems at it first, as the next step would; the state itself is
 /// not changed). Removes the [`Logger`] and returns its sink.
 pub fn finish_logging(world: &mut World, final_sample: bool) -> Option<Box<dyn LogSink>> {
+    finish_sampling::<LogChannel>(world, final_sample)
+}
+
+/// [`finish_logging`] for channel `C`. With `final_sample`, the `Contact` and
+/// `Control` systems run once more, so finish at most one channel that way.
+pub fn finish_sampling<C: SampleChannel>(
+    world: &mut World,
+    final_sample: bool,
+) -> Option<Box<dyn LogSink>> {
     let n = world.resource::<SimClock>().step;
     let due = world
-        .get_resource::<Logger>()
+        .get_resource::<Logger<C>>()
         .map(|l| n.is_multiple_of(l.every_steps) && l.last_sampled != Some(n))?;
     if final_sample && due {
         world
@@ -349,11 +396,11 @@ pub fn finish_logging(world: &mut World, final_sample: bool) -> Option<Box<dyn L
                 .run_system_once(run_controllers)
                 .expect("the simulation's resources exist");
         }
-        world.resource_scope(|world, mut logger: Mut<Logger>| {
+        world.resource_scope(|world, mut logger: Mut<Logger<C>>| {
             sample_all(world, &mut logger, n);
         });
     }
-    world.remove_resource::<Logger>().map(|mut l| {
+    world.remove_resource::<Logger<C>>().map(|mut l| {
         l.sink.flush();
         l.sink
     })
@@ -362,7 +409,7 @@ pub fn finish_logging(world: &mut World, final_sample: bool) -> Option<Box<dyn L
 /// Run condition of [`log_step`]: a [`Logger`] exists and this step either
 /// samples (the step started at a multiple of the rate) or must snapshot its
 /// end state for the next step's sample. Other steps skip the system.
-pub fn log_due(clock: Res<SimClock>, logger: Option<Res<Logger>>) -> bool {
+pub fn log_due<C: SampleChannel>(clock: Res<SimClock>, logger: Option<Res<Logger<C>>>) -> bool {
     logger.is_some_and(|l| {
         let s = clock.step;
         s.is_multiple_of(l.every_steps) || (s > 0 && (s - 1).is_multiple_of(l.every_steps))
@@ -371,8 +418,8 @@ pub fn log_due(clock: Res<SimClock>, logger: Option<Res<Logger>>) -> bool {
 
 /// The `Publish`-stage system: samples the state the step started from when
 /// its index is due, and snapshots the new state when the next step's is.
-pub fn log_step(world: &mut World) {
-    world.resource_scope(|world, mut logger: Mut<Logger>| {
+pub fn log_step<C: SampleChannel>(world: &mut World) {
+    world.resource_scope(|world, mut logger: Mut<Logger<C>>| {
         let step = world.resource::<SimClock>().step;
         let j = step.saturating_sub(1);
         if step > 0 && j.is_multiple_of(logger.every_steps) && logger.last_sampled != Some(j) {
@@ -392,7 +439,12 @@ fn robot_sim(world: &World, entity: Entity) -> Option<&RobotSim> {
 }
 
 /// Sends the robot list when it is new or a model was recompiled.
-fn announce_if_changed(world: &World, logger: &mut Logger, force: bool, step: u64) {
+fn announce_if_changed<C: SampleChannel>(
+    world: &World,
+    logger: &mut Logger<C>,
+    force: bool,
+    step: u64,
+) {
     let changed = logger.robots.iter().any(|r| {
         let now = robot_sim(world, r.entity).map(|s| &s.model);
         match (now, &r.model) {
@@ -428,7 +480,7 @@ fn announce_if_changed(world: &World, logger: &mut Logger, force: bool, step: u6
 }
 
 /// Copies every followed robot's `(q, v)` (and its model) for the next sample.
-fn snapshot(world: &World, logger: &mut Logger) {
+fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>) {
     for r in &mut logger.robots {
         let Some(sim) = robot_sim(world, r.entity) else {
             r.model = None;
@@ -447,7 +499,7 @@ fn snapshot(world: &World, logger: &mut Logger) {
 }
 
 /// Samples every logged robot at step index `j` and sends one record.
-fn sample_all(world: &World, logger: &mut Logger, j: u64) {
+fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
     let mut samples = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
@@ -479,7 +531,7 @@ fn sample_all(world: &World, logger: &mut Logger, j: u64) {
             &r.v,
             data,
             &mut r.evals,
-            &r.parents,
+            C::LINK_TRANSFORMS.then_some(&r.parents[..]),
         ));
     }
     logger.last_sampled = Some(j);
@@ -504,7 +556,7 @@ fn sample_robot(
     v: &[f64],
     data: &mut Data,
     evals: &mut Vec<ContactEval>,
-    parents: &[Option<usize>],
+    parents: Option<&[Option<usize>]>,
 ) -> RobotSample {
     let model = &sim.model;
     forward_kinematics(model, data, q, v);
@@ -540,7 +592,10 @@ fn sample_robot(
         Controller::None => None,
         c => c.joint_targets().map(<[f64]>::to_vec),
     };
-    let velocity_targets = targets.as_ref().map(|t| vec![0.0; t.len()]);
+    let velocity_targets = match &sim.run.controller {
+        Controller::External(e) => Some(e.target_radps.clone()),
+        _ => targets.as_ref().map(|t| vec![0.0; t.len()]),
+    };
     let walker = match &sim.run.controller {
         Controller::Walker(w) => Some(w),
         _ => None,
@@ -604,6 +659,8 @@ fn sample_robot(
         joint_velocity_desired: velocity_targets,
         feet,
         virtual_wrench,
-        link_transforms: link_transforms(model, data, q, base_orientation, parents),
+        link_transforms: parents.map_or_else(Vec::new, |p| {
+            link_transforms(model, data, q, base_orientation, p)
+        }),
     }
 }

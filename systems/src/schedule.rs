@@ -5,7 +5,7 @@ use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleT
 
 use crate::contact::update_contacts;
 use crate::control::run_controllers;
-use crate::log::{log_due, log_step};
+use crate::log::{LogChannel, MonitorChannel, log_due, log_step};
 use crate::metrics::record_metrics;
 use crate::publish::{pose_sync_due, sync_link_poses};
 use crate::step::{advance_clock, step_robots};
@@ -143,10 +143,19 @@ pub fn register_publish(schedule: &mut Schedule) {
     // against systems users add to `Publish` does not matter: declared
     // ambiguous with them, so that such hooks do not fail the schedule build.
     schedule.add_systems(
-        log_step
-            .run_if(log_due)
+        log_step::<LogChannel>
+            .run_if(log_due::<LogChannel>)
             .in_set(SimSystems::Publish)
             .after(sync_link_poses)
+            .ambiguous_with_all(),
+    );
+    // The live monitor (only while a `Logger<MonitorChannel>` exists): the
+    // same sampling at its own rate, after the log's.
+    schedule.add_systems(
+        log_step::<MonitorChannel>
+            .run_if(log_due::<MonitorChannel>)
+            .in_set(SimSystems::Publish)
+            .after(log_step::<LogChannel>)
             .ambiguous_with_all(),
     );
 }

@@ -1,0 +1,150 @@
+//! `quadsim monitor`: attach to a running world and print its robots live.
+
+use std::time::{Duration, Instant};
+
+use clap::Args;
+
+use crate::error::{CliError, bad};
+use crate::monitor::{FrameReader, RobotFrame, list_worlds};
+
+/// Arguments of `quadsim monitor`.
+#[derive(Debug, Args)]
+pub struct MonitorArgs {
+    /// The world to attach to (default: the only running one).
+    #[arg(long)]
+    pub world: Option<String>,
+    /// Only this robot (its scenario name).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Print this many instants as plain lines and exit (for scripts);
+    /// without it, lines stream until the world ends.
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u64>,
+    /// Seconds to wait for the world to appear, and for each instant.
+    #[arg(long, default_value_t = 10.0)]
+    pub timeout: f64,
+    /// List the running worlds and exit.
+    #[arg(long)]
+    pub list: bool,
+}
+
+fn monitor_error(e: crate::monitor::MonitorError) -> CliError {
+    bad(e.to_string())
+}
+
+/// One plain line: robot, t, speed, height, attitude, contacts.
+pub fn plain_line(name: &str, f: &RobotFrame) -> String {
+    let contacts: String = (0..f.feet())
+        .map(|i| if f.in_contact(i) { '1' } else { '0' })
+        .collect();
+    format!(
+        "{name} tick={} t={:.4} speed={:.3} height={:.4} roll={:.2} pitch={:.2} yaw={:.2} contacts={}",
+        f.tick,
+        f.time_s,
+        f.speed_mps(),
+        f.base_position_m[2],
+        f.rpy_rad[0].to_degrees(),
+        f.rpy_rad[1].to_degrees(),
+        f.rpy_rad[2].to_degrees(),
+        if contacts.is_empty() { "-" } else { &contacts }
+    )
+}
+
+/// Runs `quadsim monitor`.
+pub fn run(a: MonitorArgs) -> Result<(), CliError> {
+    if !(a.timeout.is_finite() && a.timeout >= 0.0) {
+        return Err(bad(format!(
+            "--timeout: must be a finite time ≥ 0 (s), got {}",
+            a.timeout
+        )));
+    }
+    let timeout = Duration::from_secs_f64(a.timeout);
+    if a.list {
+        for w in list_worlds().map_err(monitor_error)? {
+            println!("{w}");
+        }
+        return Ok(());
+    }
+    let world = match &a.world {
+        Some(w) => w.clone(),
+        None => pick_world(timeout)?,
+    };
+    let mut reader = match FrameReader::open(&world).map_err(monitor_error)? {
+        Some(r) => r,
+        None => {
+            eprintln!(
+                "waiting up to {:.1} s for world '{world}' to start…",
+                a.timeout
+            );
+            FrameReader::wait_open(&world, timeout).map_err(monitor_error)?
+        }
+    };
+    let header = reader.wait_header(timeout).map_err(monitor_error)?;
+    let names: Vec<String> = header["robots"]
+        .as_array()
+        .map(|r| {
+            r.iter()
+                .map(|x| x["name"].as_str().unwrap_or("?").to_string())
+                .collect()
+        })
+        .unwrap_or_default();
+    let only = match &a.robot {
+        Some(r) => Some(names.iter().position(|n| n == r).ok_or_else(|| {
+            bad(format!(
+                "--robot: world '{world}' has no robot '{r}' (robots: {})",
+                names.join(", ")
+            ))
+        })?),
+        None => None,
+    };
+    let limit = a.frames.unwrap_or(u64::MAX);
+    let mut printed = 0;
+    while printed < limit {
+        let Some(frames) = reader.next(timeout).map_err(monitor_error)? else {
+            return Err(bad(format!(
+                "world '{world}' sent nothing for {:.1} s (it ended?) after {printed} instants",
+                a.timeout
+            )));
+        };
+        for f in &frames {
+            let i = f.robot_index as usize;
+            if only.is_some_and(|o| o != i) {
+                continue;
+            }
+            let name = names.get(i).map_or("?", String::as_str);
+            println!("{}", plain_line(name, f));
+        }
+        printed += 1;
+    }
+    Ok(())
+}
+
+/// The only running world, waiting up to `timeout` for one to appear.
+fn pick_world(timeout: Duration) -> Result<String, CliError> {
+    let start = Instant::now();
+    let mut said = false;
+    loop {
+        let worlds = list_worlds().map_err(monitor_error)?;
+        match worlds.len() {
+            1 => return Ok(worlds[0].clone()),
+            0 => {}
+            _ => {
+                return Err(bad(format!(
+                    "several worlds are running, choose one with --world: {}",
+                    worlds.join(", ")
+                )));
+            }
+        }
+        if start.elapsed() >= timeout {
+            return Err(bad(format!(
+                "no world is running (waited {:.1} s); start one with `quadsim run`",
+                timeout.as_secs_f64()
+            )));
+        }
+        if !said {
+            eprintln!("no world is running yet; waiting…");
+            said = true;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}

@@ -1,0 +1,218 @@
+//! The publishing side: a [`LogSink`] of the monitor channel that writes each
+//! sampled instant as one slice sample of `n_robots` [`RobotFrame`]s into
+//! shared memory, and the world header (JSON) on every robot-list record.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::update_connections::UpdateConnections;
+use iceoryx2::prelude::*;
+use quadsim_systems::{LogRecord, LogSink, RobotInfo};
+use serde_json::json;
+
+use super::frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
+use super::{
+    MAX_SUBSCRIBERS, MonitorError, SUBSCRIBER_BUFFER_FRAMES, cleanup_dead_nodes, frames_service,
+    header_service, node_name, service_name,
+};
+
+/// Counts of a publisher, shared with the run for its report.
+#[derive(Debug, Default)]
+pub struct MonitorStats {
+    /// Instants published (one slice sample each).
+    pub published: AtomicU64,
+    /// Instants dropped because no sample could be loaned or sent.
+    pub dropped: AtomicU64,
+}
+
+impl MonitorStats {
+    /// Published instants.
+    pub fn published(&self) -> u64 {
+        self.published.load(Ordering::Relaxed)
+    }
+
+    /// Dropped instants.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+}
+
+type Svc = ipc_threadsafe::Service;
+
+/// Publishes one world's frames and header.
+pub struct FramePublisher {
+    // ports before the node: they must drop first
+    frames: Publisher<Svc, [RobotFrame], ()>,
+    header: Publisher<Svc, [u8], ()>,
+    _node: Node<Svc>,
+    world: String,
+    dt_s: f64,
+    every_steps: u64,
+    /// Model of each robot by instance name (the scenario's `robots[].model`).
+    models: Vec<(String, String)>,
+    stats: Arc<MonitorStats>,
+}
+
+impl std::fmt::Debug for FramePublisher {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FramePublisher")
+            .field("world", &self.world)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+impl FramePublisher {
+    /// Creates the services `quadsim/<world>/frames` and `quadsim/<world>/header`
+    /// for `n_robots` robots, after removing what dead processes left behind.
+    pub fn create(
+        world: &str,
+        n_robots: usize,
+        dt_s: f64,
+        every_steps: u64,
+        models: Vec<(String, String)>,
+    ) -> Result<Self, MonitorError> {
+        let fail = |what: &str, e: &dyn std::fmt::Debug| MonitorError {
+            message: format!("world '{world}': {what}: {e:?}"),
+        };
+        let node = NodeBuilder::new()
+            .name(&node_name("quadsim-run")?)
+            // quadsim handles Ctrl-C itself (log/interrupt.rs)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<Svc>()
+            .map_err(|e| fail("cannot create an iceoryx2 node", &e))?;
+        cleanup_dead_nodes::<Svc>();
+        // the header first: a reader that sees the frames service finds it
+        let header_name = service_name(&header_service(world))?;
+        let header = node
+            .service_builder(&header_name)
+            .publish_subscribe::<[u8]>()
+            .max_publishers(1)
+            .max_subscribers(MAX_SUBSCRIBERS)
+            .subscriber_max_buffer_size(2)
+            .history_size(1)
+            .enable_safe_overflow(true)
+            .create()
+            .map_err(|e| fail("cannot create the header service", &e))?
+            .publisher_builder()
+            .initial_max_slice_len(4096)
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
+            .create()
+            .map_err(|e| fail("cannot create the header publisher", &e))?;
+        let frames_name = service_name(&frames_service(world))?;
+        let frames = node
+            .service_builder(&frames_name)
+            .publish_subscribe::<[RobotFrame]>()
+            .max_publishers(1)
+            .max_subscribers(MAX_SUBSCRIBERS)
+            .subscriber_max_buffer_size(SUBSCRIBER_BUFFER_FRAMES)
+            .history_size(0)
+            .enable_safe_overflow(true)
+            .create()
+            .map_err(|e| fail("cannot create the frames service", &e))?
+            .publisher_builder()
+            .initial_max_slice_len(n_robots.max(1))
+            .allocation_strategy(AllocationStrategy::Static)
+            .max_loaned_samples(1)
+            .create()
+            .map_err(|e| fail("cannot create the frames publisher", &e))?;
+        Ok(Self {
+            frames,
+            header,
+            _node: node,
+            world: world.to_string(),
+            dt_s,
+            every_steps,
+            models,
+            stats: Arc::default(),
+        })
+    }
+
+    /// The counters (shared).
+    pub fn stats(&self) -> Arc<MonitorStats> {
+        self.stats.clone()
+    }
+
+    /// Publishes one instant: one loan of `samples.len()` frames, written in
+    /// place, one send. A failed loan or send drops the instant and counts it.
+    pub fn publish(&self, tick: u64, samples: &[quadsim_systems::RobotSample]) {
+        // late subscribers of the header get its last sample (history 1)
+        let _ = self.header.update_connections();
+        let time_s = tick as f64 * self.dt_s;
+        let Ok(sample) = self.frames.loan_slice_uninit(samples.len()) else {
+            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
+            return;
+        };
+        let sample = sample.write_from_fn(|i| RobotFrame::from_sample(&samples[i], tick, time_s));
+        match sample.send() {
+            Ok(_) => self.stats.published.fetch_add(1, Ordering::Relaxed),
+            Err(_) => self.stats.dropped.fetch_add(1, Ordering::Relaxed),
+        };
+    }
+
+    /// Publishes the header describing `robots` (JSON, see docs/monitor.md).
+    pub fn publish_header(&self, robots: &[RobotInfo]) {
+        let header = json!({
+            "layout_version": LAYOUT_VERSION,
+            "type_name": TYPE_NAME,
+            "frame_size_bytes": std::mem::size_of::<RobotFrame>(),
+            "max_dof": MAX_DOF,
+            "max_feet": MAX_FEET,
+            "world": self.world,
+            "dt_s": self.dt_s,
+            "every_steps": self.every_steps,
+            "pid": std::process::id(),
+            "robots": robots.iter().enumerate().map(|(i, r)| json!({
+                "index": i,
+                "name": r.name,
+                "model": self.models.iter().find(|(n, _)| n == &r.name)
+                    .map_or(r.model.name.as_str(), |(_, m)| m.as_str()),
+                "dof": r.model.nv - r.model.base_nv(),
+                "joints": r.joint_names(),
+                "feet": r.foot_names(),
+            })).collect::<Vec<_>>(),
+        });
+        let bytes = serde_json::to_vec(&header).expect("json");
+        let Ok(sample) = self.header.loan_slice_uninit(bytes.len()) else {
+            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
+            return;
+        };
+        let sample = sample.write_from_slice(&bytes);
+        if sample.send().is_err() {
+            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Connects subscribers that came since the last publish tick (a late
+    /// subscriber then gets the header at once, e.g. while a lockstep run
+    /// waits for its first command).
+    pub fn refresh(&self) {
+        let _ = self.header.update_connections();
+    }
+}
+
+/// The monitor channel's sink (see [`quadsim_systems::MonitorChannel`]).
+#[derive(Debug)]
+pub struct MonitorSink {
+    publisher: Arc<FramePublisher>,
+}
+
+impl MonitorSink {
+    /// A sink publishing through `publisher`.
+    pub fn new(publisher: Arc<FramePublisher>) -> Self {
+        Self { publisher }
+    }
+}
+
+impl LogSink for MonitorSink {
+    fn send(&mut self, record: LogRecord) {
+        match record {
+            LogRecord::Robots { robots, .. } => self.publisher.publish_header(&robots),
+            LogRecord::Step { t_ns, samples } => {
+                let tick = (t_ns as f64 * 1e-9 / self.publisher.dt_s).round() as u64;
+                self.publisher.publish(tick, &samples);
+            }
+        }
+    }
+}
