@@ -102,6 +102,13 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
     let every = (1.0 / (w.dt_s * w.controller_rate_hz)).round().max(1.0) as u64;
     sim.world
         .insert_resource(ControlRate { every_steps: every });
+    // Link entities get their poses at the controller rate: nothing in a run
+    // reads them (logs and monitors sample the robots' own state), and a
+    // copy per step costs a tenth of a quad16 step.
+    sim.world.insert_resource(quadsim_components::PoseSync {
+        every_steps: every,
+        requested: false,
+    });
 
     // Terrains (entities) and the default ground, compiled into the union.
     let base_dir = scn.path.parent().unwrap_or(Path::new("."));

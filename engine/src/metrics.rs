@@ -154,8 +154,9 @@ pub struct MetricsAccumulator {
 /// (Andrew's monotone chain, one stack each). The maximum (minimum) of
 /// `y − s·x` over all points, for any slope `s` known only at the end, is
 /// attained at a vertex of the upper (lower) hull. Amortised O(1) per point;
-/// the stacks are pre-sized so a trot (a few vertices per gait cycle) does not
-/// allocate in the step.
+/// the stacks are pre-sized for about a hundred gait cycles (a trot adds a few
+/// vertices per cycle) and only a longer run grows them, a few times in all
+/// (they double), not per step.
 #[derive(Clone, Debug)]
 struct Hulls {
     upper: Vec<DVec2>,
@@ -163,7 +164,7 @@ struct Hulls {
 }
 
 impl Hulls {
-    const CAPACITY: usize = 4096;
+    const CAPACITY: usize = 512;
 
     fn new() -> Self {
         Self {
