@@ -101,16 +101,40 @@ pub fn file_kind(src: &str) -> Option<String> {
         })
 }
 
-/// Reads a study file and its base scenario, and forms its variants. Errors
-/// name the file, line and key path (`vary."robots[0].params.thigh.length_m"`).
-pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
-    let src = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+/// A study file's text; an unreadable file is an error naming it.
+pub fn read_study_text(path: &Path) -> Result<String, ScenarioError> {
+    std::fs::read_to_string(path).map_err(|e| ScenarioError {
         file: path.to_path_buf(),
         line: 0,
         column: 0,
         key_path: String::new(),
         message: format!("cannot read the study: {e}"),
+    })
+}
+
+/// A study's base scenario (relative to the study file): its path, its text
+/// and its table, checked to be a valid scenario on its own.
+pub fn read_base(
+    loc: &Locator<'_>,
+    study_path: &Path,
+    base: &str,
+) -> Result<(PathBuf, String, toml::Table), ScenarioError> {
+    let base_path = study_path.parent().unwrap_or(Path::new(".")).join(base);
+    let base_source = std::fs::read_to_string(&base_path).map_err(|e| {
+        loc.at(
+            "base",
+            format!("cannot read the base scenario {}: {e}", base_path.display()),
+        )
     })?;
+    parse_scenario(&base_path, base_source.clone())?;
+    let table: toml::Table = toml::from_str(&base_source).expect("parsed above");
+    Ok((base_path, base_source, table))
+}
+
+/// Reads a study file and its base scenario, and forms its variants. Errors
+/// name the file, line and key path (`vary."robots[0].params.thigh.length_m"`).
+pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
+    let src = read_study_text(path)?;
     let loc = Locator { path, src: &src };
     let file: StudyFile =
         toml::from_str(&src).map_err(|e| loc.at_span(e.span(), e.message().trim().to_string()))?;
@@ -143,16 +167,7 @@ pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
     if file.vary.is_empty() {
         return Err(loc.at("vary", "varies nothing: name at least one path"));
     }
-    let base_path = path.parent().unwrap_or(Path::new(".")).join(&file.base);
-    let base_source = std::fs::read_to_string(&base_path).map_err(|e| {
-        loc.at(
-            "base",
-            format!("cannot read the base scenario {}: {e}", base_path.display()),
-        )
-    })?;
-    // The base must be a valid scenario on its own.
-    parse_scenario(&base_path, base_source.clone())?;
-    let base_table: toml::Table = toml::from_str(&base_source).expect("parsed above");
+    let (base_path, base_source, base_table) = read_base(&loc, path, &file.base)?;
     let mut vary = Vec::new();
     for (p, v) in &file.vary {
         let kp = format!("vary.{}", path_key(p));

@@ -117,13 +117,7 @@ pub struct Evaluation {
 /// Reads and checks an optimisation file: bounds, budget, and that the base
 /// with each start value is a valid scenario.
 pub fn load_optimization(path: &Path) -> Result<Optimization, ScenarioError> {
-    let src = std::fs::read_to_string(path).map_err(|e| ScenarioError {
-        file: path.to_path_buf(),
-        line: 0,
-        column: 0,
-        key_path: String::new(),
-        message: format!("cannot read the study: {e}"),
-    })?;
+    let src = super::read_study_text(path)?;
     let loc = Locator { path, src: &src };
     let file: OptimizeFile =
         toml::from_str(&src).map_err(|e| loc.at_span(e.span(), e.message().trim().to_string()))?;
@@ -142,15 +136,7 @@ pub fn load_optimization(path: &Path) -> Result<Optimization, ScenarioError> {
     if file.parameters.is_empty() {
         return Err(loc.at("parameters", "names no parameter to optimise"));
     }
-    let base_path = path.parent().unwrap_or(Path::new(".")).join(&file.base);
-    let base_source = std::fs::read_to_string(&base_path).map_err(|e| {
-        loc.at(
-            "base",
-            format!("cannot read the base scenario {}: {e}", base_path.display()),
-        )
-    })?;
-    parse_scenario(&base_path, base_source.clone())?;
-    let base: toml::Table = toml::from_str(&base_source).expect("parsed above");
+    let (base_path, base_source, base) = super::read_base(&loc, path, &file.base)?;
     let mut params = Vec::new();
     for (p, b) in &file.parameters {
         let kp = format!("parameters.{}", path_key(p));
