@@ -179,6 +179,24 @@ fn segments(path: &str) -> Result<Vec<(String, Option<usize>)>, String> {
     Ok(out)
 }
 
+/// The value at `path` in `table`, if there is one.
+pub fn get_path<'a>(table: &'a Table, path: &str) -> Option<&'a Value> {
+    let segs = segments(path).ok()?;
+    let mut cur: Option<&Value> = None;
+    for (key, index) in &segs {
+        let t = match cur {
+            None => table,
+            Some(v) => v.as_table()?,
+        };
+        let mut v = t.get(key)?;
+        if let Some(i) = index {
+            v = v.as_array()?.get(*i)?;
+        }
+        cur = Some(v);
+    }
+    cur
+}
+
 /// Sets the value at `path` in `table`, creating missing tables on the way
 /// (the result is type-checked when it is read as a scenario). Array items
 /// must exist.
@@ -290,6 +308,11 @@ mod tests {
         set_path(&mut t, "model", Value::String("quad12".into())).unwrap();
         let r = &t["robots"][0];
         assert_eq!(r["controller"]["v_x_mps"].as_float(), Some(0.7));
+        assert_eq!(
+            get_path(&t, "robots[0].params.thigh.length_m").and_then(Value::as_float),
+            Some(0.31)
+        );
+        assert_eq!(get_path(&t, "robots[1].name"), None);
         assert_eq!(r["params"]["thigh.length_m"].as_float(), Some(0.31));
         assert_eq!(t["model"].as_str(), Some("quad12"));
         let e = set_path(&mut t, "robots[3].name", Value::Float(1.0)).unwrap_err();

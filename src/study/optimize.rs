@@ -183,28 +183,10 @@ pub fn load_optimization(path: &Path) -> Result<Optimization, ScenarioError> {
     })
 }
 
-/// The base's number at `path` (`params.X` of a built-in is not in the
-/// file, so it is `None` there and the middle of the range is used).
+/// The base's number at `path` (a built-in's `params.X` is not in the file,
+/// so it is `None` there and the middle of the range is used).
 fn current_value(base: &toml::Table, path: &str) -> Option<f64> {
-    let root = toml::Value::Table(base.clone());
-    let mut cur = &root;
-    let mut rest = path;
-    while !rest.is_empty() {
-        let (seg, tail) = rest.split_once('.').unwrap_or((rest, ""));
-        let (key, idx) = match seg.split_once('[') {
-            Some((k, i)) => (k, i.trim_end_matches(']').parse::<usize>().ok()),
-            None => (seg, None),
-        };
-        if key == "params" && idx.is_none() {
-            return cur.get("params")?.get(tail)?.as_float();
-        }
-        cur = cur.get(key)?;
-        if let Some(i) = idx {
-            cur = cur.get(i)?;
-        }
-        rest = tail;
-    }
-    crate::scenario::validate::as_f64(cur)
+    crate::scenario::vary::get_path(base, path).and_then(crate::scenario::validate::as_f64)
 }
 
 /// The objective of a finished run (see the module docs).
