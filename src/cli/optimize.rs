@@ -8,6 +8,7 @@ use serde_json::Value;
 
 use crate::error::{CliError, bad};
 use crate::study::optimize::{Evaluation, best_index, load_optimization, results_json};
+use crate::study::output::io;
 
 /// Arguments of `quadsim optimize`.
 #[derive(Debug, Args)]
@@ -20,13 +21,6 @@ pub struct OptimizeArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
-}
-
-fn io(p: &Path, e: std::io::Error) -> CliError {
-    CliError::Io {
-        path: p.display().to_string(),
-        source: e,
-    }
 }
 
 /// Runs `quadsim optimize`.

@@ -103,10 +103,7 @@ fn pairs(
         .filter(|(r, _)| r["status"] == "ok")
         .filter_map(|(r, f)| {
             let x = r["params"][path].as_f64()?;
-            let y = match f.get(metric)? {
-                Value::Bool(b) => f64::from(u8::from(*b)),
-                v => v.as_f64()?,
-            };
+            let y = super::output::metric_number(f.get(metric)?)?;
             (x.is_finite() && y.is_finite()).then_some((x, y))
         })
         .collect()

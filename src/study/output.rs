@@ -227,11 +227,7 @@ fn write_plots(
                     let key = f
                         .keys()
                         .find(|k| *k == metric || k.ends_with(&format!("/{metric}")))?;
-                    let y = match &f[key] {
-                        Value::Bool(b) => f64::from(u8::from(*b)),
-                        v => v.as_f64()?,
-                    };
-                    Some(((*x)?, y))
+                    Some(((*x)?, metric_number(&f[key])?))
                 })
                 .collect();
             if pts.is_empty() {
@@ -353,7 +349,16 @@ fn short(v: &Value) -> String {
     }
 }
 
-fn io(p: &Path, e: std::io::Error) -> CliError {
+/// A flattened metric as a number for plots and correlations (`true` = 1).
+pub fn metric_number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Bool(b) => Some(f64::from(u8::from(*b))),
+        v => v.as_f64(),
+    }
+}
+
+/// An I/O failure on a named path.
+pub(crate) fn io(p: &Path, e: std::io::Error) -> CliError {
     CliError::Io {
         path: p.display().to_string(),
         source: e,
