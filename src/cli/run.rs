@@ -489,11 +489,12 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     if let Some(e) = command_error {
         return Err(bad(e));
     }
-    if let Some(d) = outcome.diverged {
-        return Err(CliError::Diverged(d));
-    }
     let mut summary = summary_json(&scn, &world, wall, a.threads);
-    if outcome.interrupted {
+    if let Some(d) = &outcome.diverged {
+        // What was computed up to the divergence is kept: the summary (and
+        // the report) cover the run until then; the error follows below.
+        summary["diverged"] = json!(d);
+    } else if outcome.interrupted {
         summary["interrupted"] = json!(true);
     } else {
         add_push_searches(a, &scn, &mut summary)?;
@@ -525,6 +526,9 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
             log_stats.is_some(),
         )?)
     };
+    if let Some(d) = outcome.diverged {
+        return Err(CliError::Diverged(d));
+    }
     Ok(RunOutput {
         summary,
         out_dir,
