@@ -505,7 +505,7 @@ fn compliance_spec(
         };
         let Some(k) = k else {
             return Err(loc.at(
-                &format!("{kp}.{k_key}"),
+                &format!("{kp}.dofs[{i}]"),
                 format!("DOF '{name}' needs a spring: give {k_key}"),
             ));
         };
