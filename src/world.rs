@@ -312,7 +312,6 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         let sim_r = sim.robot_mut(root).expect("compiled");
         // compliant payloads attached at start: their coordinates close q
         // and v, at rest with the springs relaxed
-        let mut q = q;
         q.resize(sim_r.model.nq, 0.0);
         sim_r.state = State {
             q,
@@ -468,7 +467,7 @@ fn compliance_spec(
             "a compliant payload declares its DOFs, e.g. dofs = [\"x\", \"y\", \"z\"]",
         ));
     }
-    if !(s.mass_kg > 0.0) {
+    if s.mass_kg <= 0.0 {
         return Err(loc.at(
             &format!("{kp}.mass_kg"),
             "a compliant payload needs a mass > 0 kg",

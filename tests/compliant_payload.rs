@@ -24,7 +24,11 @@ fn trot_slosh(duration_s: f64) -> String {
 /// The same load bolted down.
 fn rigid(src: &str) -> String {
     src.lines()
-        .filter(|l| !["dofs", "stiffness_npm", "damping_nspm"].iter().any(|k| l.starts_with(k)))
+        .filter(|l| {
+            !["dofs", "stiffness_npm", "damping_nspm"]
+                .iter()
+                .any(|k| l.starts_with(k))
+        })
         .map(|l| l.replace("kind = \"compliant\"", "kind = \"rigid\""))
         .collect::<Vec<_>>()
         .join("\n")
