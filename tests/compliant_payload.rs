@@ -204,3 +204,39 @@ fn bad_compliant_payloads_name_their_key() {
         assert!(e.line > 0, "{e}");
     }
 }
+
+/// The `prescribed` controller's hybrid mode imposes every joint's motion,
+/// so it refuses a compliant payload (naming the payload's `kind`); its PD
+/// mode drives the legs through the frozen-load view while the load moves.
+#[test]
+fn prescribed_hybrid_refuses_a_compliant_load_and_pd_carries_it() {
+    let small = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/small_trot.toml"
+    ))
+    .unwrap()
+    .replace("duration_s = 5.0", "duration_s = 0.5");
+    let load = "\n[[robots.payloads]]\nname = \"cup\"\nkind = \"compliant\"\nmass_kg = 0.5\n\
+                size_m = [0.05]\nshape = \"sphere\"\noffset_m = [0.0, 0.0, 0.05]\n\
+                dofs = [\"x\", \"y\"]\nstiffness_npm = 80.0\ndamping_nspm = 0.5\n";
+    let hybrid = small.clone() + load;
+    assert!(hybrid.contains("mode = \"hybrid\""));
+    let scn = parse_scenario(Path::new("p.toml"), hybrid.clone()).unwrap();
+    let e = build_world(&scn, Overrides::default()).unwrap_err();
+    assert_eq!(e.key_path, "robots[0].payloads[0].kind", "{e}");
+    let mut w = world(&hybrid.replace("mode = \"hybrid\"", "mode = \"pd\""));
+    let bee = w.robots[0].1;
+    assert_eq!(w.sim.robot(bee).unwrap().model.nv, 6 + 12 + 2);
+    w.sim.run(w.steps);
+    let r = w.sim.robot(bee).unwrap();
+    let load_q = &r.state.q[r.model.actuated_nq()..];
+    assert!(
+        load_q.iter().all(|x| x.is_finite() && x.abs() < 0.05),
+        "{load_q:?}"
+    );
+    assert!(
+        load_q.iter().any(|x| x.abs() > 1e-5),
+        "the load did not move"
+    );
+    assert!(!r.run.metrics.summary().fell);
+}
