@@ -222,6 +222,16 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         // Payloads attached at start are part of the spawned robot; the
         // controller was built on the bare robot and is told of the known ones.
         let payloads = payload_specs(&loc, &p, r)?;
+        if let Controller::Prescribed(pc) = &controller
+            && pc.controller.params.mode == PrescribedMode::Hybrid
+            && let Some(k) = payloads.iter().position(|(pl, _)| pl.compliance.is_some())
+        {
+            return Err(loc.at(
+                &format!("{p}.payloads[{k}].kind"),
+                "a compliant payload needs a torque-driven controller: the prescribed \
+                 controller's hybrid mode imposes every joint's motion (use mode = \"pd\")",
+            ));
+        }
         let mut spawn_desc = desc.clone();
         for (k, (pl, spec)) in payloads.iter().enumerate() {
             if spec.attached {
@@ -300,9 +310,12 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         }
         commands.sort_by(|a, b| a.0.total_cmp(&b.0));
         let sim_r = sim.robot_mut(root).expect("compiled");
+        // compliant payloads attached at start: their coordinates close q
+        // and v, at rest with the springs relaxed
+        q.resize(sim_r.model.nq, 0.0);
         sim_r.state = State {
             q,
-            v: vec![0.0; model.nv],
+            v: vec![0.0; sim_r.model.nv],
         };
         sim_r.contact.states = vec![ContactState::default(); points.len()];
         sim_r.contact.points = points;
@@ -400,17 +413,118 @@ fn payload_specs<'a>(
         if !offset.is_finite() {
             return Err(loc.at(&format!("{kp}.offset_m"), "must be finite"));
         }
+        let compliance = compliance_spec(loc, &kp, s)?;
         out.push((
             Payload {
                 name: s.name.clone(),
                 mass_kg: s.mass_kg,
                 shape,
                 offset_m: offset,
+                compliance,
             },
             s,
         ));
     }
     Ok(out)
+}
+
+/// A payload's compliance: `None` for `kind = "rigid"`; for `"compliant"`
+/// its DOFs, each with the stiffness and damping of its family.
+fn compliance_spec(
+    loc: &Locator<'_>,
+    kp: &str,
+    s: &crate::scenario::format::PayloadSpec,
+) -> Result<Option<quadsim_engine::payload::Compliance>, ScenarioError> {
+    use quadsim_engine::payload::{Compliance, DofSpring, LoadDof};
+    let compliant_keys = [
+        ("dofs", !s.dofs.is_empty()),
+        ("stiffness_npm", s.stiffness_npm.is_some()),
+        ("damping_nspm", s.damping_nspm.is_some()),
+        ("stiffness_nm_per_rad", s.stiffness_nm_per_rad.is_some()),
+        ("damping_nms_per_rad", s.damping_nms_per_rad.is_some()),
+    ];
+    match s.kind.as_deref().unwrap_or("rigid") {
+        "rigid" => {
+            if let Some((key, _)) = compliant_keys.iter().find(|(_, set)| *set) {
+                return Err(loc.at(
+                    &format!("{kp}.{key}"),
+                    "only a payload of kind = \"compliant\" takes it",
+                ));
+            }
+            return Ok(None);
+        }
+        "compliant" => {}
+        other => {
+            return Err(loc.at(
+                &format!("{kp}.kind"),
+                format!("unknown payload kind '{other}': expected rigid or compliant"),
+            ));
+        }
+    }
+    if s.dofs.is_empty() {
+        return Err(loc.at(
+            &format!("{kp}.dofs"),
+            "a compliant payload declares its DOFs, e.g. dofs = [\"x\", \"y\", \"z\"]",
+        ));
+    }
+    if s.mass_kg <= 0.0 {
+        return Err(loc.at(
+            &format!("{kp}.mass_kg"),
+            "a compliant payload needs a mass > 0 kg",
+        ));
+    }
+    let mut dofs: Vec<DofSpring> = Vec::new();
+    for (i, name) in s.dofs.iter().enumerate() {
+        let Some(dof) = LoadDof::parse(name) else {
+            return Err(loc.at(
+                &format!("{kp}.dofs[{i}]"),
+                format!("unknown DOF '{name}': expected x, y, z, roll, pitch or yaw"),
+            ));
+        };
+        if dofs.iter().any(|d| d.dof == dof) {
+            return Err(loc.at(
+                &format!("{kp}.dofs[{i}]"),
+                format!("DOF '{name}' declared twice"),
+            ));
+        }
+        let (k_key, k, b_key, b) = if dof.is_translation() {
+            (
+                "stiffness_npm",
+                s.stiffness_npm,
+                "damping_nspm",
+                s.damping_nspm,
+            )
+        } else {
+            (
+                "stiffness_nm_per_rad",
+                s.stiffness_nm_per_rad,
+                "damping_nms_per_rad",
+                s.damping_nms_per_rad,
+            )
+        };
+        let Some(k) = k else {
+            return Err(loc.at(
+                &format!("{kp}.dofs[{i}]"),
+                format!("DOF '{name}' needs a spring: give {k_key}"),
+            ));
+        };
+        if !(k.is_finite() && k > 0.0) {
+            return Err(loc.at(
+                &format!("{kp}.{k_key}"),
+                "must be a finite stiffness > 0 (a free load would leave the robot)",
+            ));
+        }
+        let b = b.unwrap_or(0.0);
+        if !(b.is_finite() && b >= 0.0) {
+            return Err(loc.at(&format!("{kp}.{b_key}"), "must be a finite damping ≥ 0"));
+        }
+        dofs.push(DofSpring {
+            dof,
+            stiffness: k,
+            damping: b,
+        });
+    }
+    Ok(Some(Compliance { dofs }))
 }
 
 /// The robot's description: a built-in with parameter overrides, or a URDF

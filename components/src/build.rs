@@ -14,7 +14,7 @@ use thiserror::Error;
 use crate::collider::{Collider, ColliderOf, LinkColliders, LinkVisuals, Visual, VisualOf};
 use crate::joint::{
     EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
-    JointPlacement, VelocityLimit,
+    JointPlacement, SpringDamper, VelocityLimit,
 };
 use crate::link::{CenterOfMass, Foot, FootPoint, Inertia, Link, Mass};
 use crate::robot::{BelongsTo, Robot, RobotBase, RobotModelName, RobotParts};
@@ -150,6 +150,9 @@ pub fn spawn_joint(
     if let Some((lower, upper)) = j.limits {
         e.insert(JointLimits { lower, upper });
     }
+    if let Some(s) = j.spring {
+        e.insert(SpringDamper(s));
+    }
     e.id()
 }
 
@@ -258,6 +261,7 @@ pub fn describe_robot_with_links(
         if let Some(v) = ent.get::<JointArmature>() {
             j.armature = v.0;
         }
+        j.spring = ent.get::<SpringDamper>().map(|s| s.0);
         desc.joints.push(j);
     }
     Ok((desc, links))

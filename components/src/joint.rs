@@ -116,3 +116,8 @@ pub struct JointFriction(pub f64);
 /// Reflected rotor inertia added to the joint's diagonal of M (kg·m² or kg, ≥ 0).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
 pub struct JointArmature(pub f64);
+
+/// A spring–damper on the joint's coordinate, at rest at zero (a compliant
+/// payload's force element); absent on ordinary joints.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct SpringDamper(pub quadsim_engine::description::JointSpring);

@@ -60,15 +60,15 @@ pub use external::ExternalJoint;
 pub use forces::{ContactForces, Ground, Push, Terrain};
 pub use joint::{
     EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
-    JointMotion, JointPlacement, VelocityLimit,
+    JointMotion, JointPlacement, SpringDamper, VelocityLimit,
 };
 pub use link::{
     CenterOfMass, ComputedInertia, Foot, FootContact, FootPoint, Inertia, Link, LinkPose, Mass,
 };
 pub use payload::{PayloadAction, PayloadEvent, PayloadEvents};
 pub use resources::{
-    PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
-    ThreadPoolError,
+    ControlView, PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig,
+    SimThreadPool, ThreadPoolError,
 };
 pub use robot::{
     BelongsTo, CompileFailure, Robot, RobotBase, RobotIndex, RobotModelName, RobotParts,

@@ -134,6 +134,51 @@ pub struct RobotSim {
     /// Debug counter: the pool worker (`rayon::current_thread_index`) that ran
     /// this robot's last step, `None` before the first.
     pub last_worker: Option<usize>,
+    /// What the controller sees when the robot carries compliant payloads
+    /// (`model.load_nv > 0`): the robot with its loads frozen at rest;
+    /// `None` otherwise (the controller reads `model` and `data`).
+    pub control: Option<ControlView>,
+}
+
+/// The controller's view of a robot that carries compliant payloads: the
+/// model with each load frozen at its rest offset (its sprung joints made
+/// fixed, so the load is a rigid payload), whose q and v are the actuated
+/// prefix of the robot's (`Model::actuated_nq`, `Model::actuated_nv`) and
+/// whose bodies are the robot's first ones. A controller measures no load
+/// coordinate and commands no load joint (they have no actuator).
+#[derive(Debug)]
+pub struct ControlView {
+    /// The frozen model.
+    pub model: Arc<Model>,
+    /// Its workspace.
+    pub data: Data,
+}
+
+impl ControlView {
+    /// The view of `model` (with `desc` it was compiled from), or `None`
+    /// without compliant payloads.
+    pub fn of(
+        desc: &quadsim_engine::description::RobotDescription,
+        model: &Model,
+        base: quadsim_engine::BaseKind,
+    ) -> Option<Self> {
+        if model.load_nv == 0 {
+            return None;
+        }
+        let mut frozen = desc.clone();
+        for j in &mut frozen.joints {
+            if j.spring.take().is_some() {
+                j.kind = quadsim_engine::description::JointKind::Fixed;
+            }
+        }
+        let mut m = Model::from_description(&frozen, base).ok()?;
+        m.gravity = model.gravity;
+        debug_assert_eq!(m.nv, model.actuated_nv());
+        Some(Self {
+            data: Data::new(&m),
+            model: Arc::new(m),
+        })
+    }
 }
 
 impl RobotSim {
@@ -156,6 +201,7 @@ impl RobotSim {
             run: RobotRun::default(),
             link_entities,
             last_worker: None,
+            control: None,
             model,
         }
     }

@@ -190,6 +190,21 @@ pub struct JointDesc {
     pub friction: f64,
     /// Reflected rotor inertia added to the joint's diagonal (kg·m² or kg).
     pub armature: f64,
+    /// A spring–damper force element on the joint's coordinate (a compliant
+    /// payload's), `None` for an ordinary joint.
+    pub spring: Option<JointSpring>,
+}
+
+/// A linear spring–damper acting on one joint coordinate, at rest at q = 0:
+/// `τ = −k q − b q̇` (the force element of a compliant payload). Unlike the
+/// joint's `damping`, it is part of the load, not a joint imperfection, so
+/// no passive-model switch turns it off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointSpring {
+    /// Stiffness k (N/m for a prismatic joint, N·m/rad for a revolute one), ≥ 0.
+    pub stiffness: f64,
+    /// Damping b (N·s/m or N·m·s/rad), ≥ 0.
+    pub damping: f64,
 }
 
 impl JointDesc {
@@ -213,6 +228,7 @@ impl JointDesc {
             damping: 0.0,
             friction: 0.0,
             armature: 0.0,
+            spring: None,
         }
     }
 

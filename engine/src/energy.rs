@@ -22,3 +22,14 @@ pub fn potential_energy(model: &Model, data: &Data) -> f64 {
     let m: f64 = (0..model.nbodies).map(|i| data.inertia_ref[i].mass).sum();
     -m * model.gravity.dot(c)
 }
+
+/// Elastic energy of the model's joint springs `½ Σ k q²` (J): with the
+/// kinetic and gravitational energies, the total that an undamped, unforced
+/// model conserves.
+pub fn spring_energy(model: &Model, q: &[f64]) -> f64 {
+    model
+        .springs
+        .iter()
+        .map(|s| 0.5 * s.stiffness * q[s.iq] * q[s.iq])
+        .sum()
+}

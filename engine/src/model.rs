@@ -185,6 +185,26 @@ pub struct Model {
     pub gravity: DVec3,
     /// Whole-robot mass (kg).
     pub total_mass: f64,
+    /// Joint springs (compliant payloads' force elements), one per sprung coordinate.
+    pub springs: Vec<SpringElement>,
+    /// Number of trailing coordinates (the last `load_nv` of q and of v, and
+    /// the last `load_nv` bodies) that belong to compliant payloads: sprung,
+    /// unactuated, not addressed by controllers (see [`Model::actuated_nv`]).
+    pub load_nv: usize,
+}
+
+/// A linear spring–damper on one joint coordinate, at rest at q = 0:
+/// `τ = −k q − b q̇` (from the description's [`crate::description::JointSpring`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpringElement {
+    /// Index of the coordinate in q.
+    pub iq: usize,
+    /// Index of the coordinate in v.
+    pub iv: usize,
+    /// Stiffness (N/m or N·m/rad).
+    pub stiffness: f64,
+    /// Damping (N·s/m or N·m·s/rad).
+    pub damping: f64,
 }
 
 /// Standard gravity used by default (m/s², world z up).
@@ -251,6 +271,8 @@ impl Model {
             feet: Vec::new(),
             gravity: STANDARD_GRAVITY,
             total_mass: 0.0,
+            springs: Vec::new(),
+            load_nv: 0,
         };
 
         // Movable joints take q/v slots in document order, whatever the body order.
@@ -329,6 +351,14 @@ impl Model {
                         m.damping[iv] = j.damping;
                         m.friction[iv] = j.friction;
                         m.armature[iv] = j.armature;
+                        if let Some(sp) = j.spring {
+                            m.springs.push(SpringElement {
+                                iq: q0 + r,
+                                iv,
+                                stiffness: sp.stiffness,
+                                damping: sp.damping,
+                            });
+                        }
                         link_body[ci] = Some((b, Transform::IDENTITY));
                     }
                 }
@@ -372,7 +402,37 @@ impl Model {
                 .ok_or(ModelError::UnknownFoot(f.clone()))?;
             m.feet.push(fi);
         }
+        // Compliant payloads' coordinates and bodies must close the model, so
+        // that the actuated joints and the bodies controllers address keep
+        // their indices when a load is attached or detached.
+        m.springs.sort_by_key(|s| s.iv);
+        m.load_nv = m.springs.len();
+        let first_load_v = m.nv - m.load_nv;
+        let first_load_body = m.nbodies - m.load_nv;
+        for (k, s) in m.springs.iter().enumerate() {
+            let body = m.v_body[s.iv];
+            if s.iv != first_load_v + k || body < first_load_body {
+                return Err(ModelError::InvalidValue {
+                    item: m.joint_name[body].clone(),
+                    field: "spring",
+                    value: s.iv as f64,
+                    why: "a sprung (compliant payload) joint must come after every other \
+                          joint, parents first, in the description",
+                });
+            }
+        }
         Ok(m)
+    }
+
+    /// Size of the actuated part of v: the base and the joints, without
+    /// compliant payloads' trailing coordinates.
+    pub fn actuated_nv(&self) -> usize {
+        self.nv - self.load_nv
+    }
+
+    /// Size of the actuated part of q (the base and the joints).
+    pub fn actuated_nq(&self) -> usize {
+        self.nq - self.load_nv
     }
 
     /// Index of the frame (link) with this name.
@@ -498,6 +558,24 @@ fn validate(desc: &RobotDescription) -> Result<(), ModelError> {
         ] {
             if v.is_nan() || v < 0.0 {
                 return Err(bad(&j.name, field, v, "must be ≥ 0"));
+            }
+        }
+        if let Some(sp) = j.spring {
+            for (field, v) in [
+                ("spring stiffness", sp.stiffness),
+                ("spring damping", sp.damping),
+            ] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(bad(&j.name, field, v, "must be finite and ≥ 0"));
+                }
+            }
+            if !j.is_movable() {
+                return Err(bad(
+                    &j.name,
+                    "spring",
+                    0.0,
+                    "a fixed joint cannot carry a spring",
+                ));
             }
         }
     }

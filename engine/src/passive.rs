@@ -121,7 +121,9 @@ pub fn saturate(model: &Model, params: &PassiveParams, tau_actuator: &[f64], tau
 }
 
 /// Adds the passive joint torques at `(q, v)` into `tau` (nv): damping,
-/// friction and soft limits as switched on in `params`. The base is untouched.
+/// friction and soft limits as switched on in `params`, and always the
+/// model's joint springs (compliant payloads' spring–dampers, see
+/// [`spring_torques`]). The base is untouched.
 pub fn add_passive_torques(
     model: &Model,
     params: &PassiveParams,
@@ -151,6 +153,17 @@ pub fn add_passive_torques(
             );
         }
         tau[iv] += t;
+    }
+    spring_torques(model, q, v, tau);
+}
+
+/// Adds the model's joint springs `τ = −k q − b q̇` into `tau` (nv): the force
+/// elements of compliant payloads, part of the load, so no switch of
+/// [`PassiveParams`] turns them off. Their potential is
+/// [`crate::energy::spring_energy`].
+pub fn spring_torques(model: &Model, q: &[f64], v: &[f64], tau: &mut [f64]) {
+    for s in &model.springs {
+        tau[s.iv] -= s.stiffness * q[s.iq] + s.damping * v[s.iv];
     }
 }
 

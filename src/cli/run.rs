@@ -696,7 +696,7 @@ fn opt(x: Option<f64>) -> Value {
 
 /// The actuated joints' names, in the order of the joint arrays.
 pub fn joint_names(model: &quadsim_engine::Model) -> Vec<String> {
-    (model.base_nv()..model.nv)
+    (model.base_nv()..model.actuated_nv())
         .map(|vi| model.joint_name[model.v_body[vi]].clone())
         .collect()
 }

@@ -273,7 +273,7 @@ impl CommandReceiver {
             let Some(sim) = world.sim.robot_mut(entity) else {
                 continue;
             };
-            let nj = sim.model.nv - sim.model.base_nv();
+            let nj = sim.model.actuated_nv() - sim.model.base_nv();
             let result = match (&mut sim.run.controller, c.mode) {
                 (Controller::External(e), MODE_JOINT | MODE_TORQUE) => {
                     if c.n_dof as usize != nj {

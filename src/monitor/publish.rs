@@ -168,7 +168,7 @@ impl FramePublisher {
                 "name": r.name,
                 "model": self.models.iter().find(|(n, _)| n == &r.name)
                     .map_or(r.model.name.as_str(), |(_, m)| m.as_str()),
-                "dof": r.model.nv - r.model.base_nv(),
+                "dof": r.model.actuated_nv() - r.model.base_nv(),
                 "joints": r.joint_names(),
                 "feet": r.foot_names(),
             })).collect::<Vec<_>>(),

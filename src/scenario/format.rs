@@ -275,7 +275,7 @@ pub struct RobotSpec {
     /// Whether `quadsim run` logs this robot's per-step channels. Default true.
     #[serde(default = "default_true")]
     pub log: bool,
-    /// Rigid payloads on the torso (attached at start, or by `attach` events).
+    /// Payloads on the torso, rigid or compliant (attached at start, or by `attach` events).
     #[serde(default)]
     pub payloads: Vec<PayloadSpec>,
     /// Analyses run after the main run (`[robots.analysis]`).
@@ -283,7 +283,8 @@ pub struct RobotSpec {
     pub analysis: AnalysisSpec,
 }
 
-/// `[[robots.payloads]]`: a uniform solid bolted to the torso.
+/// `[[robots.payloads]]`: a uniform solid bolted to the torso (`kind =
+/// "rigid"`), or on a spring–damper along declared DOFs (`kind = "compliant"`).
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PayloadSpec {
@@ -304,6 +305,22 @@ pub struct PayloadSpec {
     /// Whether the walking controller's gravity compensation knows the mass (default true).
     #[serde(default = "default_true")]
     pub known_to_controller: bool,
+    /// `rigid` (default) or `compliant` (a sloshing or soft load: a body of
+    /// its own on a spring–damper, free along `dofs`).
+    pub kind: Option<String>,
+    /// Compliant: the load's DOFs relative to the torso, any of `x`, `y`,
+    /// `z` (translations in torso axes) and `roll`, `pitch`, `yaw`
+    /// (intrinsic rotations about the load's centre).
+    #[serde(default)]
+    pub dofs: Vec<String>,
+    /// Compliant: spring stiffness of each translation DOF (N/m).
+    pub stiffness_npm: Option<f64>,
+    /// Compliant: damping of each translation DOF (N·s/m, default 0).
+    pub damping_nspm: Option<f64>,
+    /// Compliant: spring stiffness of each rotation DOF (N·m/rad).
+    pub stiffness_nm_per_rad: Option<f64>,
+    /// Compliant: damping of each rotation DOF (N·m·s/rad, default 0).
+    pub damping_nms_per_rad: Option<f64>,
 }
 
 /// `[robots.analysis]`: analyses that re-run the scenario after the main run

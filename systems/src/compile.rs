@@ -13,10 +13,10 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 use quadsim_components::{
     BelongsTo, CenterOfMass, Collider, ColliderOf, CompileError, CompileFailure, ComputedInertia,
-    EffortLimit, Foot, FootPoint, Inertia, Joint, JointArmature, JointConnection, JointDamping,
-    JointFriction, JointLimits, JointPlacement, Link, LinkColliders, LinkVisuals, Mass, Robot,
-    RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim, SimConfig,
-    VelocityLimit, Visual, VisualOf, describe_robot_with_links,
+    ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointArmature, JointConnection,
+    JointDamping, JointFriction, JointLimits, JointPlacement, Link, LinkColliders, LinkVisuals,
+    Mass, Robot, RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim,
+    SimConfig, SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
 };
 use quadsim_engine::Model;
 
@@ -86,6 +86,7 @@ type JointChanged = Or<(
     Changed<JointDamping>,
     Changed<JointFriction>,
     Changed<JointArmature>,
+    Changed<SpringDamper>,
 )>;
 
 /// A collider or visual entity whose shape changed, with the link it belongs to.
@@ -104,6 +105,7 @@ type Removals<'w, 's> = (
     RemovedComponents<'w, 's, FootPoint>,
     RemovedComponents<'w, 's, Link>,
     RemovedComponents<'w, 's, Joint>,
+    RemovedComponents<'w, 's, SpringDamper>,
 );
 
 /// Collects the robots whose description changed since the last run. A
@@ -130,14 +132,15 @@ pub fn mark_dirty_robots(
             dirty.robots.push(owner.0);
         }
     }
-    let (r0, r1, r2, r3, r4, r5) = &mut removed;
+    let (r0, r1, r2, r3, r4, r5, r6) = &mut removed;
     let removed_entities = r0
         .read()
         .chain(r1.read())
         .chain(r2.read())
         .chain(r3.read())
         .chain(r4.read())
-        .chain(r5.read());
+        .chain(r5.read())
+        .chain(r6.read());
     for e in removed_entities {
         // A despawned entity has no owner any more; its robot's RobotParts changed instead.
         if let Ok(owner) = owners.get(e) {
@@ -153,7 +156,9 @@ pub fn mark_dirty_robots(
 /// whole robots and writes the batch).
 ///
 /// A recompiled robot keeps its state `(q, v)` and actuator command when nq and
-/// nv are unchanged; otherwise it restarts at the neutral configuration, at rest.
+/// nv are unchanged, or when only its compliant payloads changed (see
+/// [`carry_over_loads`]); otherwise it restarts at the neutral
+/// configuration, at rest.
 pub fn compile_dirty_robots(world: &mut World) {
     {
         let dirty = world.resource::<DirtyRobots>();
@@ -227,7 +232,9 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
         }
     }
     world.entity_mut(root).remove::<CompileFailure>();
+    let control = ControlView::of(&desc, &model, base);
     let mut sim = RobotSim::new(root, Arc::new(model), links, config.passive);
+    sim.control = control;
     let slot = world
         .get::<RobotIndex>(root)
         .map(|i| i.0)
@@ -244,6 +251,9 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
                     std::mem::swap(&mut sim.run, &mut old.run);
                     std::mem::swap(&mut sim.contact, &mut old.contact);
                 }
+            } else if carry_over_loads(old, &mut sim) {
+                std::mem::swap(&mut sim.run, &mut old.run);
+                std::mem::swap(&mut sim.contact, &mut old.contact);
             }
             sim.last_worker = old.last_worker;
             *old = sim;
@@ -255,4 +265,36 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
                 .insert(RobotIndex(batch.sims.len() - 1));
         }
     }
+}
+
+/// A compliant payload attached or detached: the two models differ only in
+/// their trailing load coordinates and bodies (the robot's own bodies, q and
+/// v keep their indices). Then the new state takes the old one's actuated
+/// part, each load coordinate the old value of the joint of the same name
+/// (a newly attached load starts at rest relative to the torso, springs
+/// relaxed: it moves with the torso), and the actuator command its actuated
+/// part; the controller, metrics and contact states go on. Returns false
+/// (nothing carried) when the robot's own structure changed.
+pub fn carry_over_loads(old: &RobotSim, new: &mut RobotSim) -> bool {
+    let (a, b) = (&old.model, &new.model);
+    let nb = a.nbodies - a.load_nv;
+    if a.actuated_nq() != b.actuated_nq()
+        || a.actuated_nv() != b.actuated_nv()
+        || b.nbodies - b.load_nv != nb
+        || a.parent[..nb] != b.parent[..nb]
+        || a.joint_name[..nb] != b.joint_name[..nb]
+    {
+        return false;
+    }
+    let (nq, nv) = (a.actuated_nq(), a.actuated_nv());
+    new.state.q[..nq].copy_from_slice(&old.state.q[..nq]);
+    new.state.v[..nv].copy_from_slice(&old.state.v[..nv]);
+    new.tau_actuator[..nv].copy_from_slice(&old.tau_actuator[..nv]);
+    for body in nb..b.nbodies {
+        if let Some(ob) = (nb..a.nbodies).find(|&ob| a.joint_name[ob] == b.joint_name[body]) {
+            new.state.q[b.idx_q[body]] = old.state.q[a.idx_q[ob]];
+            new.state.v[b.idx_v[body]] = old.state.v[a.idx_v[ob]];
+        }
+    }
+    true
 }

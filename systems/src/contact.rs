@@ -48,11 +48,13 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     obs.com_velocity_mps = com_velocity(model, data);
     obs.base_height_above_ground_m = height_above_ground(&contact.terrain, obs.base.trans);
     obs.com_height_above_ground_m = height_above_ground(&contact.terrain, obs.com_m);
+    // the actuated joints (compliant payloads' coordinates close q and v)
     let (nq0, nv0) = (model.base_nq(), model.base_nv());
+    let (nq, nv) = (model.actuated_nq(), model.actuated_nv());
     obs.q_joints.clear();
-    obs.q_joints.extend_from_slice(&state.q[nq0..]);
+    obs.q_joints.extend_from_slice(&state.q[nq0..nq]);
     obs.qd_joints.clear();
-    obs.qd_joints.extend_from_slice(&state.v[nv0..]);
+    obs.qd_joints.extend_from_slice(&state.v[nv0..nv]);
     obs.feet.resize(run.n_feet, FootSample::default());
     for (i, foot) in obs.feet.iter_mut().enumerate() {
         let (p, s) = (&contact.points[i], &contact.states[i]);

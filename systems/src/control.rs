@@ -2,6 +2,11 @@
 //! the controller rate ([`ControlRate`]); the command is held in between.
 //! The `prescribed` controller in hybrid mode refreshes its imposed joint
 //! motion every step (the integrator follows it exactly).
+//!
+//! A robot carrying compliant payloads is controlled through its
+//! [`ControlView`](quadsim_components::ControlView): the controller reads the
+//! actuated prefix of `(q, v)` on the model with the loads frozen at rest,
+//! writes the actuated joints' torques, and the loads' joints get none.
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{
@@ -44,11 +49,16 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
         tau_actuator,
         workspace,
         run,
+        control,
         ..
     } = sim;
     let Controller::Prescribed(p) = &mut run.controller else {
         return;
     };
+    let (nq, nv) = (model.actuated_nq(), model.actuated_nv());
+    tau_actuator[nv..].fill(0.0);
+    let model = control.as_ref().map_or(&**model, |c| &*c.model);
+    let (q, v, tau_actuator) = (&state.q[..nq], &state.v[..nv], &mut tau_actuator[..nv]);
     let nv0 = model.base_nv();
     let nq0 = model.base_nq();
     match p.controller.params.mode {
@@ -63,12 +73,8 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
             if tick {
                 p.controller.update_reference(model, t_s);
                 tau_actuator[..nv0].fill(0.0);
-                p.controller.pd_torques(
-                    model,
-                    &state.q[nq0..],
-                    &state.v[nv0..],
-                    &mut tau_actuator[nv0..],
-                );
+                p.controller
+                    .pd_torques(model, &q[nq0..], &v[nv0..], &mut tau_actuator[nv0..]);
             }
         }
     }
@@ -95,12 +101,20 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             tau_actuator,
             contact,
             run,
+            control,
             ..
         } = sim;
         let Controller::Walker(w) = &mut run.controller else {
             unreachable!()
         };
-        forward_kinematics(model, data, &state.q, &state.v);
+        let (nq, nv) = (model.actuated_nq(), model.actuated_nv());
+        tau_actuator[nv..].fill(0.0);
+        let (model, data) = match control {
+            Some(c) => (&*c.model, &mut c.data),
+            None => (&**model, data),
+        };
+        let (q, v, tau_actuator) = (&state.q[..nq], &state.v[..nv], &mut tau_actuator[..nv]);
+        forward_kinematics(model, data, q, v);
         let n = run.n_feet.min(4);
         let mut contacts = [false; 4];
         let mut normals = [glam::DVec3::Z; 4];
@@ -127,14 +141,7 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             contacts: &contacts[..n],
             normals: &normals[..n],
         };
-        w.tick(
-            model,
-            data,
-            &state.q,
-            &state.v,
-            &input,
-            &mut tau_actuator[nb..],
-        );
+        w.tick(model, data, q, v, &input, &mut tau_actuator[nb..]);
         return;
     }
     control_robot(sim);
@@ -144,24 +151,26 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
 pub fn control_robot(sim: &mut RobotSim) {
     let nb = sim.model.base_nv();
     let (nq0, nv0) = (sim.model.base_nq(), nb);
+    // the actuated joints only: compliant payloads' joints have no actuator
+    let (nq, nv) = (sim.model.actuated_nq(), sim.model.actuated_nv());
     match &sim.run.controller {
         Controller::None | Controller::Walker(_) | Controller::Prescribed(_) => {
             sim.tau_actuator.fill(0.0)
         }
         Controller::JointPd(pd) => {
-            sim.tau_actuator[..nb].fill(0.0);
+            sim.tau_actuator.fill(0.0);
             pd.compute(
-                &sim.state.q[nq0..],
-                &sim.state.v[nv0..],
-                &mut sim.tau_actuator[nb..],
+                &sim.state.q[nq0..nq],
+                &sim.state.v[nv0..nv],
+                &mut sim.tau_actuator[nb..nv],
             );
         }
         Controller::External(e) => {
-            sim.tau_actuator[..nb].fill(0.0);
+            sim.tau_actuator.fill(0.0);
             e.compute(
-                &sim.state.q[nq0..],
-                &sim.state.v[nv0..],
-                &mut sim.tau_actuator[nb..],
+                &sim.state.q[nq0..nq],
+                &sim.state.v[nv0..nv],
+                &mut sim.tau_actuator[nb..nv],
             );
         }
     }

@@ -67,10 +67,11 @@ pub struct RobotInfo {
 }
 
 impl RobotInfo {
-    /// Names of the actuated joints, in velocity order (nv − base).
+    /// Names of the actuated joints, in velocity order (nv − base − the
+    /// compliant payloads' trailing coordinates).
     pub fn joint_names(&self) -> Vec<String> {
         let m = &self.model;
-        (m.base_nv()..m.nv)
+        (m.base_nv()..m.actuated_nv())
             .map(|i| m.joint_name[m.v_body[i]].clone())
             .collect()
     }
@@ -581,7 +582,7 @@ fn sample_robot(
     let obs = &sim.run.observation;
     let nv0 = model.base_nv();
     let nq0 = model.base_nq();
-    let command = &sim.tau_actuator[nv0..];
+    let command = &sim.tau_actuator[nv0..model.actuated_nv()];
     let saturate = sim.workspace.passive.saturation;
     let effort = command
         .iter()
@@ -651,8 +652,8 @@ fn sample_robot(
         com_m: obs.com_m,
         com_velocity_mps: obs.com_velocity_mps,
         com_acceleration_mps2: com_acc,
-        joint_position: q[nq0..].to_vec(),
-        joint_velocity: v[nv0..].to_vec(),
+        joint_position: q[nq0..model.actuated_nq()].to_vec(),
+        joint_velocity: v[nv0..model.actuated_nv()].to_vec(),
         joint_effort: effort,
         joint_effort_command: command.to_vec(),
         joint_position_desired: targets,

@@ -28,7 +28,8 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
         ..
     } = sim;
     let nv0 = model.base_nv();
-    let nj = model.nv - nv0;
+    // the actuated joints (not compliant payloads')
+    let nj = model.actuated_nv() - nv0;
     run.tau_joints.resize(nj, 0.0);
     for j in 0..nj {
         let lim = if saturate {
@@ -57,7 +58,7 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
     };
     run.metrics.record(&sample);
     run.actuators
-        .record(&tau_actuator[nv0..], &obs.qd_joints, dt_s);
+        .record(&tau_actuator[nv0..nv0 + nj], &obs.qd_joints, dt_s);
     if let quadsim_components::Controller::Walker(w) = &run.controller {
         run.commanded_distance_m.0 += w.active_command().forward_mps * dt_s;
         run.commanded_distance_m.1 += dt_s;

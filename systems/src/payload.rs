@@ -1,6 +1,9 @@
 //! Applies due payload events between steps: an attach spawns the payload's
-//! link and fixed joint under the robot's torso link, a detach despawns them;
-//! the compile stage that follows merges the change into the robot's model.
+//! links and joints under the robot's torso link (one link on a fixed joint
+//! when rigid; a chain of sprung joints when compliant), a detach despawns
+//! them; the compile stage that follows merges the change into the robot's
+//! model (and maps the state across a compliant payload's coordinates, see
+//! [`crate::compile::carry_over_loads`]).
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::relationship::RelationshipTarget;
@@ -48,31 +51,54 @@ pub fn apply_payload_events(world: &mut World) {
                 if find(world, &link_name).is_some() {
                     continue; // already attached
                 }
-                let (link, joint) = match e.payload.parts(&e.parent_link) {
+                let (links, joints) = match e.payload.parts(&e.parent_link) {
                     Ok(p) => p,
                     Err(err) => {
                         eprintln!("{err}");
                         continue;
                     }
                 };
-                let child = spawn_link(world, e.robot, &link);
-                spawn_joint(world, e.robot, &joint, JointConnection { parent, child });
+                let spawned: Vec<(String, Entity)> = links
+                    .iter()
+                    .map(|l| (l.name.clone(), spawn_link(world, e.robot, l)))
+                    .collect();
+                let entity = |name: &str| {
+                    spawned
+                        .iter()
+                        .find(|(n, _)| n == name)
+                        .map_or(parent, |(_, e)| *e)
+                };
+                for j in &joints {
+                    let connection = JointConnection {
+                        parent: entity(&j.parent),
+                        child: entity(&j.child),
+                    };
+                    spawn_joint(world, e.robot, j, connection);
+                }
                 e.payload.mass_kg
             }
             PayloadAction::Detach => {
-                let Some(link) = find(world, &link_name) else {
+                if find(world, &link_name).is_none() {
                     continue; // not attached
-                };
+                }
+                let links: Vec<Entity> = e
+                    .payload
+                    .link_names()
+                    .iter()
+                    .filter_map(|n| find(world, n))
+                    .collect();
                 let mut joints = world.query::<(Entity, &JointConnection, &BelongsTo)>();
-                let mount: Vec<Entity> = joints
+                let mounts: Vec<Entity> = joints
                     .iter(world)
-                    .filter(|(_, c, b)| c.child == link && b.0 == e.robot)
+                    .filter(|(_, c, b)| links.contains(&c.child) && b.0 == e.robot)
                     .map(|(j, ..)| j)
                     .collect();
-                for j in mount {
+                for j in mounts {
                     world.despawn(j);
                 }
-                world.despawn(link);
+                for l in links {
+                    world.despawn(l);
+                }
                 -e.payload.mass_kg
             }
         };
