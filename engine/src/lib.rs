@@ -19,6 +19,7 @@
 
 pub mod aba;
 pub mod actuators;
+pub mod batch;
 pub mod com;
 pub mod contact;
 pub mod control;
