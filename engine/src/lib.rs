@@ -13,6 +13,7 @@
 //! | CRBA (mass matrix) | [`crba`] | `mass_matrix` |
 //! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
 //! | ABA (forward dynamics) | [`aba`] | `ddq` |
+//! | kinematics + ABA for 4 robots of one model in SIMD lanes | [`batch`] | `BatchData::ddq` |
 //! | point Jacobians | [`jacobian`] | `jacobian` |
 //! | CoM, momentum | [`com`] | (returns) |
 //! | energies | [`energy`] | (returns) |
