@@ -10,7 +10,12 @@ mod common;
 
 use glam::DVec3;
 use quadsim_engine::aba::{aba, aba_from_kinematics};
-use quadsim_engine::batch::{BatchData, aba_batch, aba_batch_generic, forward_kinematics_batch};
+use quadsim_engine::batch::{
+    BatchData, StepParts, aba_batch, aba_batch_generic, forward_kinematics_batch,
+    step_semi_implicit_batch,
+};
+use quadsim_engine::integrate::{ForceModel, Integrator, State, StepWorkspace, step};
+use quadsim_engine::jacobian::add_point_force_jt;
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::spatial::Force;
@@ -237,4 +242,131 @@ fn batch_call_allocates_nothing() {
     });
     assert!(sink.is_finite());
     assert_eq!(n, 0, "{n} allocations in batched calls");
+}
+
+/// A penalty ground under every body origin (through `data.f_ext`) and a
+/// joint-space push on the last body (through `Jᵀ f` into `tau`, which reads
+/// the motion subspaces): a state-dependent force model like contact.
+#[derive(Clone)]
+struct Ground {
+    contacts: usize,
+}
+
+impl ForceModel for Ground {
+    fn apply(&mut self, model: &Model, data: &mut Data, _q: &[f64], _v: &[f64], tau: &mut [f64]) {
+        for b in 0..model.nbodies {
+            let p = data.body_point_world(b, DVec3::ZERO);
+            if p.z < 0.0 {
+                let vel = data.body_point_velocity(b, DVec3::ZERO);
+                let fz = (1e4 * -p.z - 100.0 * vel.z).max(0.0);
+                data.add_point_force(b, p, DVec3::new(-0.1 * vel.x, -0.1 * vel.y, fz));
+                self.contacts += 1;
+            }
+        }
+        let last = model.nbodies - 1;
+        let p = data.body_point_world(last, DVec3::ZERO);
+        add_point_force_jt(model, data, last, p, DVec3::new(1.0, -2.0, 0.5), tau);
+    }
+}
+
+struct Sim {
+    data: Data,
+    ws: StepWorkspace,
+    state: State,
+    tau: Vec<f64>,
+    ground: Ground,
+}
+
+fn parts(s: &mut Sim) -> StepParts<'_, Ground> {
+    StepParts {
+        data: &mut s.data,
+        ws: &mut s.ws,
+        state: &mut s.state,
+        tau_actuator: &s.tau,
+        forces: &mut s.ground,
+    }
+}
+
+fn sims(model: &Model, n: usize, seed: u64) -> Vec<Sim> {
+    (0..n)
+        .map(|k| {
+            let r = robot(model, seed + k as u64);
+            let mut state = State { q: r.q, v: r.v };
+            state.q[2] = 0.05; // low, so that the ground acts
+            Sim {
+                data: Data::new(model),
+                ws: StepWorkspace::new(model),
+                state,
+                tau: r.tau,
+                ground: Ground { contacts: 0 },
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn batch_step_equals_scalar_step_bit_for_bit() {
+    for m in [builtin("quad16"), builtin("quad12")] {
+        for n in [4, 3, 1] {
+            let mut scalar_sims = sims(&m, n, 500);
+            let mut batch_sims = sims(&m, n, 500);
+            let mut bd = BatchData::<4>::new(&m);
+            for _ in 0..40 {
+                for s in &mut scalar_sims {
+                    step(
+                        &m,
+                        &mut s.data,
+                        &mut s.ws,
+                        &mut s.state,
+                        &s.tau,
+                        5e-4,
+                        Integrator::SemiImplicitEuler,
+                        &mut s.ground,
+                    );
+                }
+                step_semi_implicit_batch(&m, &mut bd, &mut batch_sims, parts, 5e-4);
+            }
+            for (k, (a, b)) in scalar_sims.iter().zip(&batch_sims).enumerate() {
+                assert!(a.ground.contacts > 0, "the ground never acted");
+                assert_eq!(a.ground.contacts, b.ground.contacts);
+                assert_eq!(
+                    bits(&a.state.q),
+                    bits(&b.state.q),
+                    "{} robot {k}/{n}: q",
+                    m.name
+                );
+                assert_eq!(
+                    bits(&a.state.v),
+                    bits(&b.state.v),
+                    "{} robot {k}/{n}: v",
+                    m.name
+                );
+                assert_eq!(
+                    bits(&a.ws.last_acceleration()),
+                    bits(&b.ws.last_acceleration())
+                );
+                assert_eq!(bits(a.ws.last_tau()), bits(b.ws.last_tau()));
+            }
+        }
+    }
+}
+
+#[test]
+fn batch_step_allocates_nothing() {
+    let m = builtin("quad16");
+    let mut batch_sims = sims(&m, 4, 600);
+    let mut bd = BatchData::<4>::new(&m);
+    step_semi_implicit_batch(&m, &mut bd, &mut batch_sims, parts, 5e-4);
+    let n = allocations_in(|| {
+        for _ in 0..5 {
+            step_semi_implicit_batch(&m, &mut bd, &mut batch_sims, parts, 5e-4);
+            step_semi_implicit_batch(&m, &mut bd, &mut batch_sims[..2], parts, 5e-4);
+        }
+    });
+    assert!(
+        batch_sims
+            .iter()
+            .all(|s| s.state.q.iter().all(|x| x.is_finite()))
+    );
+    assert_eq!(n, 0, "{n} allocations in batched steps");
 }

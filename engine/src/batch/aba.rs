@@ -30,6 +30,26 @@ pub fn aba_batch<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_exter
     aba_dispatch(model, bd, use_external);
 }
 
+/// ABA of the active lanes after [`super::forward_kinematics_batch`] on the
+/// same `bd.q`, `bd.v` (the batched [`crate::aba::aba_from_kinematics`]):
+/// fills `bd.ddq` and `bd.acc` as [`aba_batch`] does.
+///
+/// # Panics
+/// If `bd` was sized for a model of other sizes.
+pub fn aba_from_kinematics_batch<const L: usize>(
+    model: &Model,
+    bd: &mut BatchData<L>,
+    use_external: bool,
+) {
+    bd.check_model(model);
+    aba_only_dispatch(model, bd, use_external);
+}
+
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn aba_only_dispatch<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external: bool) {
+    aba_lanes(model, bd, use_external);
+}
+
 /// [`aba_batch`] compiled for the build's generic target only, never the
 /// AVX2 version: for tests that the portable code gives the same bits, and
 /// for benchmarks of what runtime dispatch gains.

@@ -33,9 +33,11 @@ pub mod aba;
 pub mod kinematics;
 pub mod lanes;
 pub mod spatial;
+pub mod step;
 
-pub use aba::{aba_batch, aba_batch_generic};
+pub use aba::{aba_batch, aba_batch_generic, aba_from_kinematics_batch};
 pub use kinematics::forward_kinematics_batch;
+pub use step::{StepParts, step_semi_implicit_batch};
 
 use crate::model::Model;
 use crate::spatial::Force;
@@ -161,6 +163,87 @@ impl<const L: usize> BatchData<L> {
         for (dst, &x) in self.tau.iter_mut().zip(tau) {
             dst.0[lane] = x;
         }
+    }
+
+    /// Writes robot `lane`'s state `(q, v)` only (nq, nv).
+    ///
+    /// # Panics
+    /// If a length is wrong or `lane ≥ L`.
+    pub fn set_state(&mut self, lane: usize, q: &[f64], v: &[f64]) {
+        assert!(lane < L, "lane {lane} ≥ {L}");
+        assert_eq!(q.len(), self.q.len(), "q length");
+        assert_eq!(v.len(), self.v.len(), "v length");
+        for (dst, &x) in self.q.iter_mut().zip(q) {
+            dst.0[lane] = x;
+        }
+        for (dst, &x) in self.v.iter_mut().zip(v) {
+            dst.0[lane] = x;
+        }
+    }
+
+    /// Writes robot `lane`'s generalised force (nv).
+    ///
+    /// # Panics
+    /// If the length is wrong or `lane ≥ L`.
+    pub fn set_tau(&mut self, lane: usize, tau: &[f64]) {
+        assert!(lane < L, "lane {lane} ≥ {L}");
+        assert_eq!(tau.len(), self.tau.len(), "tau length");
+        for (dst, &x) in self.tau.iter_mut().zip(tau) {
+            dst.0[lane] = x;
+        }
+    }
+
+    /// True when this workspace has `model`'s sizes (it holds nothing else
+    /// of a model, so any model of these sizes may use it).
+    pub fn fits(&self, model: &Model) -> bool {
+        self.pose.len() == model.nbodies && self.q.len() == model.nq && self.v.len() == model.nv
+    }
+
+    /// Copies lane `lane`'s kinematics (after [`forward_kinematics_batch`] on
+    /// `(q, v)`, which must be that lane's state) into a scalar `data`:
+    /// `origin`, `pose`, `s`, `s_base`, `inertia_ref`, `vel`, and marks them
+    /// valid for `(model, q, v)`, exactly as [`crate::kinematics::forward_kinematics`]
+    /// would have left them.
+    pub fn kinematics_into(
+        &self,
+        lane: usize,
+        model: &Model,
+        data: &mut crate::Data,
+        q: &[f64],
+        v: &[f64],
+    ) {
+        use crate::model::JointType;
+        use crate::spatial::{Motion, RigidInertia};
+        use glam::DVec3;
+        let n = model.nbodies;
+        data.origin = self.origin.lane(lane);
+        for i in 0..n {
+            data.pose[i] = self.pose[i].lane(lane);
+            data.vel[i] = self.vel[i].lane(lane);
+            let ri = &self.inertia_ref[i];
+            data.inertia_ref[i] = RigidInertia::new(
+                ri.mass.0[lane],
+                ri.com.lane(lane),
+                ri.inertia_com.lane(lane),
+            );
+        }
+        for i in 1..n {
+            data.s[i] = self.s[i].lane(lane);
+        }
+        if model.joint_type[0] == JointType::Free {
+            let r = data.pose[0].rot;
+            for k in 0..3 {
+                data.s_base[k] = Motion::new(r.col(k), DVec3::ZERO);
+                data.s_base[k + 3] = Motion::new(DVec3::ZERO, r.col(k));
+            }
+        }
+        let key = &mut data.kin;
+        key.model = model as *const Model as usize;
+        key.q.clear();
+        key.q.extend_from_slice(q);
+        key.v.clear();
+        key.v.extend_from_slice(v);
+        key.level = 2;
     }
 
     /// Writes robot `lane`'s external forces (nbodies; world axes about its
