@@ -342,8 +342,8 @@ fn batch_step_equals_scalar_step_bit_for_bit() {
                     m.name
                 );
                 assert_eq!(
-                    bits(&a.ws.last_acceleration()),
-                    bits(&b.ws.last_acceleration())
+                    bits(a.ws.last_acceleration()),
+                    bits(b.ws.last_acceleration())
                 );
                 assert_eq!(bits(a.ws.last_tau()), bits(b.ws.last_tau()));
             }
