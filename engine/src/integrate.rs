@@ -165,18 +165,18 @@ pub struct StepWorkspace {
     /// [`PassiveParams::none`] for ideal joints and unclamped actuators.
     pub passive: PassiveParams,
     /// Saturated actuator torques, constant over a step (nv).
-    tau_actuator: Vec<f64>,
+    pub(crate) tau_actuator: Vec<f64>,
     /// Total generalised force of the current stage (nv).
-    tau: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
     /// Stage configuration (nq) and its unit-quaternion copy used for dynamics (nq).
-    q_stage: Vec<f64>,
+    pub(crate) q_stage: Vec<f64>,
     q_eval: Vec<f64>,
     /// Stage velocity (nv).
     v_stage: Vec<f64>,
     /// Configuration derivatives of the four stages, embedded coordinates (4 × nq).
     dq: [Vec<f64>; 4],
     /// Accelerations of the four stages (4 × nv).
-    dv: [Vec<f64>; 4],
+    pub(crate) dv: [Vec<f64>; 4],
     /// Hybrid dynamics: when set, the joints follow this motion and the
     /// actuator torques are its output, not an input (see [`ImposedJoints`]).
     pub imposed: Option<ImposedJoints>,

@@ -114,7 +114,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64]) {
 
 /// `Some((k, ±1))` when `axis` is ±(the k-th unit vector) exactly.
 #[inline]
-fn aligned_axis(axis: DVec3) -> Option<(usize, f64)> {
+pub(crate) fn aligned_axis(axis: DVec3) -> Option<(usize, f64)> {
     match (axis.x == 0.0, axis.y == 0.0, axis.z == 0.0) {
         (false, true, true) => Some((0, axis.x.signum())),
         (true, false, true) => Some((1, axis.y.signum())),

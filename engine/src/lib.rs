@@ -13,12 +13,14 @@
 //! | CRBA (mass matrix) | [`crba`] | `mass_matrix` |
 //! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
 //! | ABA (forward dynamics) | [`aba`] | `ddq` |
+//! | kinematics + ABA for 4 robots of one model in SIMD lanes | [`batch`] | `BatchData::ddq` |
 //! | point Jacobians | [`jacobian`] | `jacobian` |
 //! | CoM, momentum | [`com`] | (returns) |
 //! | energies | [`energy`] | (returns) |
 
 pub mod aba;
 pub mod actuators;
+pub mod batch;
 pub mod com;
 pub mod contact;
 pub mod control;
