@@ -30,7 +30,7 @@ pub use ground::compile_ground;
 pub use log::{
     FootLog, LogChannel, LogRecord, LogSink, Logger, MonitorChannel, RobotInfo, RobotSample,
     SampleChannel, finish_logging, finish_sampling, frame_parents, log_due, log_step,
-    start_logging, start_sampling, step_time_ns,
+    start_logging, start_sampling, start_sampling_each, step_time_ns,
 };
 pub use metrics::{record_metrics, record_robot};
 pub use payload::apply_payload_events;
