@@ -231,17 +231,41 @@ fn command_line_patterns_replace_the_selection_and_set_rates() {
     check_counts(&c, &plan);
 }
 
+/// Sixteen more quad12 at the world rate: instants with ≥ 16 robots due are
+/// sampled on the thread pool (`PARALLEL_SAMPLING_MIN_ROBOTS`).
+const HERD_D: &str = r#"
+[[herds]]
+name = "d"
+count = 16
+layout = { kind = "grid", columns = 8, spacing_m = [1.0, 1.0], origin_m = [-4.0, -4.0] }
+[herds.robot]
+model = "quad12"
+[herds.robot.controller]
+kind = "joint_pd"
+"#;
+
 #[test]
 fn a_decimated_selective_log_is_byte_identical_across_threads_and_per_robot_across_order() {
-    let src = herd_src(HERD_A, HERD_B);
+    let with_d = |src: String| src.replace("\"c-*\"]", "\"c-*\", \"d-*\"]");
+    let src = with_d(herd_src(HERD_A, &format!("{HERD_B}{HERD_D}")));
+    assert!(
+        16 + 3 >= quadsim::systems::PARALLEL_SAMPLING_MIN_ROBOTS,
+        "the instants at multiples of 4 steps must sample in parallel"
+    );
     let o = LogOverrides::default();
-    let (c1, one, _) = run(&src, 1, &o, "t1");
+    let (c1, one, plan) = run(&src, 1, &o, "t1");
+    check_counts(&c1, &plan);
     let (_, two, _) = run(&src, 2, &o, "t2");
     assert!(one == two, "1 and 2 threads write different files");
     let (_, again, _) = run(&src, 2, &o, "t2b");
     assert!(two == again, "repeated runs differ");
     // herds swapped in the file: each robot's messages are the same bytes
-    let (c3, _, _) = run(&herd_src(HERD_B, HERD_A), 2, &o, "swap");
+    let (c3, _, _) = run(
+        &with_d(herd_src(&format!("{HERD_D}{HERD_B}"), HERD_A)),
+        2,
+        &o,
+        "swap",
+    );
     let by_robot = |c: &LogContents| {
         let mut m: BTreeMap<String, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
         for msg in &c.messages {

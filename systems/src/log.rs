@@ -33,7 +33,8 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::system::RunSystemOnce;
 use glam::{DQuat, DVec3};
 use quadsim_components::{
-    ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, describe_robot,
+    ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, SimThreadPool,
+    describe_robot,
 };
 use quadsim_engine::contact::{ContactEval, contact_forces};
 use quadsim_engine::description::RobotDescription;
@@ -544,10 +545,26 @@ fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>, due: Option
     }
 }
 
+/// Robots sampled at one instant from which the sampling runs on the
+/// world's thread pool (fewer: serially, where a fork–join costs more).
+pub const PARALLEL_SAMPLING_MIN_ROBOTS: usize = 16;
+
+/// One robot's sampling work at an instant (see [`sample_all`]).
+struct SampleJob<'a> {
+    robot: &'a mut Followed,
+    sim: &'a RobotSim,
+    index: usize,
+    out: Option<RobotSample>,
+}
+
 /// Samples every logged robot due at step index `j` and sends one record.
+/// Robots are sampled independently (each from its own snapshot and
+/// scratch), in parallel on the world's [`SimThreadPool`] for a herd, and
+/// collected in the logger's order, so the record does not depend on the
+/// thread count.
 fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
-    let mut samples = Vec::new();
+    let mut jobs = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
     let mut index = 0;
     for r in &mut logger.robots {
@@ -569,17 +586,31 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             r.parents = frame_parents(&sim.model);
             r.model = Some(sim.model.clone());
         }
-        let data = r.data.as_mut().expect("snapshot made data");
-        samples.push(sample_robot(
-            i,
+        jobs.push(SampleJob {
+            robot: r,
             sim,
+            index: i,
+            out: None,
+        });
+    }
+    let work = |job: &mut SampleJob<'_>| {
+        let r = &mut *job.robot;
+        let data = r.data.as_mut().expect("snapshot made data");
+        job.out = Some(sample_robot(
+            job.index,
+            job.sim,
             &r.q,
             &r.v,
             data,
             &mut r.evals,
             C::LINK_TRANSFORMS.then_some(&r.parents[..]),
         ));
+    };
+    match world.get_resource::<SimThreadPool>() {
+        Some(pool) if jobs.len() >= PARALLEL_SAMPLING_MIN_ROBOTS => pool.for_each(&mut jobs, work),
+        _ => jobs.iter_mut().for_each(work),
     }
+    let samples = jobs.into_iter().filter_map(|job| job.out).collect();
     logger.last_sampled = Some(j);
     logger.sink.send(LogRecord::Step {
         t_ns: step_time_ns(j, dt),
