@@ -248,10 +248,8 @@ kind = "joint_pd"
 fn a_decimated_selective_log_is_byte_identical_across_threads_and_per_robot_across_order() {
     let with_d = |src: String| src.replace("\"c-*\"]", "\"c-*\", \"d-*\"]");
     let src = with_d(herd_src(HERD_A, &format!("{HERD_B}{HERD_D}")));
-    assert!(
-        16 + 3 >= quadsim::systems::PARALLEL_SAMPLING_MIN_ROBOTS,
-        "the instants at multiples of 4 steps must sample in parallel"
-    );
+    // the instants at multiples of 4 steps must sample in parallel
+    const { assert!(16 + 3 >= quadsim::systems::PARALLEL_SAMPLING_MIN_ROBOTS) };
     let o = LogOverrides::default();
     let (c1, one, plan) = run(&src, 1, &o, "t1");
     check_counts(&c1, &plan);
