@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+pub mod dashboard;
 pub mod dynamics;
 pub mod export;
 pub mod models;

@@ -1,4 +1,6 @@
-//! `quadsim monitor`: attach to a running world and print its robots live.
+//! `quadsim monitor`: attach to a running world and show its robots live:
+//! the ratatui dashboard ([`super::dashboard`]) on a terminal, plain lines
+//! with `--frames N` or when the output is not a terminal (scripts, pipes).
 
 use std::time::{Duration, Instant};
 
@@ -13,11 +15,12 @@ pub struct MonitorArgs {
     /// The world to attach to (default: the only running one).
     #[arg(long)]
     pub world: Option<String>,
-    /// Only this robot (its scenario name).
+    /// Only this robot (its scenario name): the dashboard focuses it.
     #[arg(long)]
     pub robot: Option<String>,
     /// Print this many instants as plain lines and exit (for scripts);
-    /// without it, lines stream until the world ends.
+    /// without it, the live dashboard (or, when the output is not a
+    /// terminal, plain lines until the world ends).
     #[arg(long, value_name = "N")]
     pub frames: Option<u64>,
     /// Seconds to wait for the world to appear, and for each instant.
@@ -97,6 +100,13 @@ pub fn run(a: MonitorArgs) -> Result<(), CliError> {
         })?),
         None => None,
     };
+    if a.frames.is_none() && std::io::IsTerminal::is_terminal(&std::io::stdout()) {
+        let mut board = super::dashboard::Dashboard::new(&world, names, only);
+        let mut term = ratatui::init();
+        let res = live(&mut term, &mut reader, &mut board, timeout);
+        ratatui::restore();
+        return res;
+    }
     let limit = a.frames.unwrap_or(u64::MAX);
     let mut printed = 0;
     while printed < limit {
@@ -117,6 +127,59 @@ pub fn run(a: MonitorArgs) -> Result<(), CliError> {
         printed += 1;
     }
     Ok(())
+}
+
+/// The dashboard's loop: drains the instants that arrived, redraws at most
+/// 30 times a second, handles keys; fails when no instant came for `timeout`.
+fn live<B: ratatui::backend::Backend>(
+    term: &mut ratatui::Terminal<B>,
+    reader: &mut FrameReader,
+    board: &mut super::dashboard::Dashboard,
+    timeout: Duration,
+) -> Result<(), CliError>
+where
+    B::Error: Into<std::io::Error>,
+{
+    use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind};
+    let io = |e: std::io::Error| CliError::Io {
+        path: "terminal".into(),
+        source: e,
+    };
+    let mut last_instant = Instant::now();
+    loop {
+        while let Some(frames) = reader.try_next().map_err(monitor_error)? {
+            board.update(&frames);
+            last_instant = Instant::now();
+        }
+        let quiet = last_instant.elapsed();
+        if quiet >= timeout {
+            return Err(bad(format!(
+                "world '{}' sent nothing for {:.1} s (it ended?) after {} instants",
+                reader.world(),
+                timeout.as_secs_f64(),
+                board.instants
+            )));
+        }
+        if quiet >= Duration::from_secs(1) {
+            board.status = Some(format!("no instant for {:.1} s", quiet.as_secs_f64()));
+        }
+        term.draw(|f| board.draw(f)).map_err(|e| io(e.into()))?;
+        if event::poll(Duration::from_millis(33)).map_err(io)?
+            && let Event::Key(k) = event::read().map_err(io)?
+            && k.kind == KeyEventKind::Press
+        {
+            match k.code {
+                KeyCode::Char('q') | KeyCode::Esc => return Ok(()),
+                KeyCode::Up => board.scroll(-1),
+                KeyCode::Down => board.scroll(1),
+                KeyCode::PageUp => board.scroll(-20),
+                KeyCode::PageDown => board.scroll(20),
+                KeyCode::Enter => board.focus = Some(board.selected),
+                KeyCode::Backspace => board.focus = None,
+                _ => {}
+            }
+        }
+    }
 }
 
 /// The only running world, waiting up to `timeout` for one to appear.

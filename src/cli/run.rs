@@ -36,13 +36,24 @@ pub struct RunArgs {
     /// No progress bar and no metrics table (summary.json is still written).
     #[arg(long)]
     pub quiet: bool,
-    /// Write no `log.mcap` (summary.json only).
-    #[arg(long)]
+    /// Write no `log.mcap`: summary.json and report.md (without plots) only,
+    /// as `[log] mode = "summary"`.
+    #[arg(long, visible_alias = "summary-only")]
     pub no_log: bool,
+    /// Write `log.mcap` (`mcap`) or not (`summary`), overriding `[log] mode`.
+    #[arg(long, value_name = "mcap|summary")]
+    pub log: Option<String>,
     /// Log rate in Hz (dividing the step rate) or `full` (every step),
-    /// overriding `world.log_rate_hz` (default: the controller rate).
-    #[arg(long, value_name = "HZ|full")]
-    pub log_rate: Option<String>,
+    /// overriding `world.log_rate_hz` (default: the controller rate);
+    /// `PATTERN=RATE` sets the rate of the robots matching a name or glob
+    /// pattern instead, over their `[robots.log] rate_hz`. Repeatable.
+    #[arg(long, value_name = "[PATTERN=]HZ|full")]
+    pub log_rate: Vec<String>,
+    /// Log only these robots' per-step channels: names or glob patterns,
+    /// comma-separated (`q16-00*,q12-000`), replacing `[log] robots` and
+    /// every robot's `log` setting.
+    #[arg(long, value_name = "NAME,...")]
+    pub log_robots: Option<String>,
     /// After the run, search the largest push each robot recovers from
     /// (as `[robots.analysis] push_search = true` for every robot; the
     /// robot's other `push_*` keys apply). Adds `push_recovery` to summary.json.
@@ -236,27 +247,77 @@ pub struct RunOutput {
     pub report: Option<crate::report::ReportFiles>,
 }
 
-/// Steps between log samples: `--log-rate`, else `world.log_rate_hz`, else the controller rate.
+/// Steps between log samples: the last bare `--log-rate`, else
+/// `world.log_rate_hz`, else the controller rate.
 fn log_every_steps(a: &RunArgs, scn: &Scenario) -> Result<u64, CliError> {
     use crate::scenario::format::LogRateSpec;
     let w = &scn.file.world;
-    let spec = match &a.log_rate {
-        Some(s) => match s.parse::<f64>() {
-            Ok(hz) => LogRateSpec::Hz(hz),
-            Err(_) => LogRateSpec::Named(s.clone()),
-        },
+    let mut cli = None;
+    for arg in &a.log_rate {
+        let (pattern, spec) =
+            crate::log::select::parse_rate_arg(arg).map_err(|m| bad(format!("--log-rate: {m}")))?;
+        if pattern.is_none() {
+            cli = Some(spec);
+        }
+    }
+    let spec = match cli {
+        Some(s) => s,
         None => w
             .log_rate_hz
             .clone()
             .unwrap_or(LogRateSpec::Hz(w.controller_rate_hz)),
     };
     spec.every_steps(w.dt_s).map_err(|m| {
-        if a.log_rate.is_some() {
-            bad(format!("--log-rate: {m}"))
-        } else {
+        if a.log_rate.is_empty() {
             bad(format!("{}: world.log_rate_hz: {m}", a.scenario.display()))
+        } else {
+            bad(format!("--log-rate: {m}"))
         }
     })
+}
+
+/// Whether the run writes `log.mcap`: `--no-log`/`--summary-only`, else
+/// `--log`, else `[log] mode`.
+fn log_wanted(a: &RunArgs, scn: &Scenario) -> Result<bool, CliError> {
+    use crate::scenario::format::LogMode;
+    if a.no_log {
+        return Ok(false);
+    }
+    match a.log.as_deref() {
+        Some("mcap") => Ok(true),
+        Some("summary") => Ok(false),
+        Some(other) => Err(bad(format!(
+            "--log: unknown mode '{other}': expected mcap or summary"
+        ))),
+        None => Ok(scn.file.log.mode == LogMode::Mcap),
+    }
+}
+
+/// Each robot's decimation: the scenario's with `--log-robots` and the
+/// robot-pattern `--log-rate` values over it.
+fn log_plan(
+    a: &RunArgs,
+    scn: &Scenario,
+    world: &World,
+    every: u64,
+) -> Result<crate::log::select::LogPlan, CliError> {
+    use crate::log::select::{LogOverrides, LogPlan, parse_rate_arg};
+    let mut o = LogOverrides::default();
+    if let Some(list) = &a.log_robots {
+        o.robots =
+            Some(LogOverrides::parse_robots(list).map_err(|m| bad(format!("--log-robots: {m}")))?);
+    }
+    for arg in &a.log_rate {
+        if let (Some(p), spec) = parse_rate_arg(arg).map_err(|m| bad(format!("--log-rate: {m}")))? {
+            let d = spec
+                .every_steps(world.dt_s)
+                .map_err(|m| bad(format!("--log-rate {arg}: {m}")))?;
+            o.rates.push((p, d));
+        }
+    }
+    o.check_matches(world.robots.iter().map(|(n, _)| n.as_str()))
+        .map_err(bad)?;
+    Ok(LogPlan::new(scn, world, every, &o))
 }
 
 /// Starts the live monitor unless `--no-monitor`; shared memory that cannot
@@ -441,12 +502,15 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         b.set_message(scn.name.clone());
         b
     };
-    let log = if a.no_log {
-        None
-    } else {
+    let log = if log_wanted(a, &scn)? {
         let every = log_every_steps(a, &scn)?;
+        let plan = log_plan(a, &scn, &world, every)?;
         let path = out_dir.join(crate::log::LOG_FILE);
-        Some(crate::log::start_run_log(&scn, &mut world, &path, every)?)
+        Some(crate::log::start_run_log_with(
+            &scn, &mut world, &path, &plan,
+        )?)
+    } else {
+        None
     };
     let monitor = start_monitor(a, &scn, &mut world)?;
     let mut commands = start_commands(a, &world, monitor.as_ref())?;

@@ -6,7 +6,8 @@
 //! - [`encode`]: JSON encoding of the simulation's samples;
 //! - [`writer`]: the MCAP writer thread;
 //! - [`read`]: reading a log back (tolerates a truncated file);
-//! - [`interrupt`]: Ctrl-C / SIGTERM as a flag the run loop polls.
+//! - [`interrupt`]: Ctrl-C / SIGTERM as a flag the run loop polls;
+//! - [`select`]: which robots are logged, and at which decimation.
 //!
 //! [`start_run_log`] and [`RunLog::finish`] tie them to a `quadsim run`.
 
@@ -14,6 +15,7 @@ pub mod encode;
 pub mod interrupt;
 pub mod read;
 pub mod schema;
+pub mod select;
 pub mod writer;
 
 use std::collections::BTreeMap;
@@ -21,7 +23,7 @@ use std::path::Path;
 
 use glam::DVec3;
 use quadsim_engine::terrain::{Terrain as _, TerrainUnion};
-use quadsim_systems::{finish_logging, start_logging, step_time_ns};
+use quadsim_systems::{finish_logging, start_sampling_each, step_time_ns};
 use serde_json::{Value, json};
 use sha2::{Digest, Sha256};
 
@@ -73,13 +75,27 @@ pub fn integrator_name(scn: &Scenario) -> &'static str {
 }
 
 /// Creates `path`, writes the metadata and the terrain description, and
-/// attaches a logger sampling every `every_steps` steps to the world.
+/// attaches a logger sampling every `every_steps` steps to the world (robots
+/// with a rate of their own, `[robots.log] rate_hz`, at theirs; robots
+/// deselected by `[log] robots` or `log = false` not at all).
 pub fn start_run_log(
     scn: &Scenario,
     world: &mut World,
     path: &Path,
     every_steps: u64,
 ) -> Result<RunLog, LogError> {
+    let plan = select::LogPlan::new(scn, world, every_steps, &Default::default());
+    start_run_log_with(scn, world, path, &plan)
+}
+
+/// [`start_run_log`] with each robot's decimation given by `plan`.
+pub fn start_run_log_with(
+    scn: &Scenario,
+    world: &mut World,
+    path: &Path,
+    plan: &select::LogPlan,
+) -> Result<RunLog, LogError> {
+    let every_steps = plan.every_steps;
     let sha = Sha256::digest(scn.source.as_bytes());
     let w = &scn.file.world;
     let mut scenario = BTreeMap::new();
@@ -110,6 +126,18 @@ pub fn start_run_log(
     ] {
         quadsim.insert(k.to_string(), json_text(v));
     }
+    if !plan.is_uniform() {
+        // robots at their own decimation (steps; null: not logged)
+        let each: serde_json::Map<String, Value> = plan
+            .robots
+            .iter()
+            .map(|(_, name, d)| (name.clone(), json!(d)))
+            .collect();
+        quadsim.insert(
+            "robot_log_every_steps".to_string(),
+            json_text(Value::Object(each)),
+        );
+    }
     let union = crate::world::ground_of(world);
     let log = McapLog::create(
         path,
@@ -122,20 +150,13 @@ pub fn start_run_log(
         0,
         &terrain_description(scn),
     );
-    let robots: Vec<_> = world
-        .robots
-        .iter()
-        .map(|(name, e)| {
-            let logged = scn
-                .file
-                .robots
-                .iter()
-                .find(|r| &r.name == name)
-                .is_none_or(|r| r.log);
-            (*e, logged)
-        })
-        .collect();
-    start_logging(&mut world.sim.world, log.sink(), every_steps, &robots);
+    let robots: Vec<_> = plan.robots.iter().map(|(e, _, d)| (*e, *d)).collect();
+    start_sampling_each::<quadsim_systems::LogChannel>(
+        &mut world.sim.world,
+        log.sink(),
+        every_steps,
+        &robots,
+    );
     Ok(RunLog { log, every_steps })
 }
 

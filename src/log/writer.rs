@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 
 use mcap::records::Metadata;
 use mcap::{Compression, WriteOptions, Writer};
-use quadsim_systems::{LogRecord, LogSink};
+use quadsim_systems::{LogRecord, LogSink, RobotInfo};
 
 use super::encode::{
     GroundMesh, RobotNames, RobotTopic, encode_robot, encode_scene, encode_transforms,
@@ -312,7 +312,9 @@ impl Output {
                     .iter()
                     .map(|r| RobotTopic::ALL.iter().map(|t| t.topic(&r.name)).collect())
                     .collect();
-                encode_scene(&robots, &self.ground, t_ns, self.scenes > 0, &mut self.buf);
+                // robots without per-step channels have no `/tf` to place their links
+                let shown: Vec<RobotInfo> = robots.iter().filter(|r| r.logged).cloned().collect();
+                encode_scene(&shown, &self.ground, t_ns, self.scenes > 0, &mut self.buf);
                 self.scenes += 1;
                 self.put(SCENE_TOPIC, Schema::SceneUpdate, t_ns, None)
             }

@@ -34,6 +34,9 @@ pub struct ScenarioFile {
     /// (see [`crate::scenario::herd`]).
     #[serde(default)]
     pub herds: Vec<HerdSpec>,
+    /// `[log]`: which robots `quadsim run` logs, and whether it writes a log at all.
+    #[serde(default)]
+    pub log: LogSpec,
     /// Key path that errors about each robot name (`robots[i]`, or
     /// `herds[h].robot` for a herd's robots); filled on load.
     #[serde(skip)]
@@ -272,9 +275,12 @@ pub struct RobotSpec {
     /// The controller.
     #[serde(default)]
     pub controller: ControllerSpec,
-    /// Whether `quadsim run` logs this robot's per-step channels. Default true.
-    #[serde(default = "default_true")]
-    pub log: bool,
+    /// This robot's per-step channels in `quadsim run`'s log: `true`/`false`,
+    /// or a table `{ enabled = true, rate_hz = 50 }` with its own rate.
+    /// Default: logged at the world's log rate.
+    #[serde(default)]
+    #[schemars(with = "RobotLogToml")]
+    pub log: RobotLogSpec,
     /// Payloads on the torso, rigid or compliant (attached at start, or by `attach` events).
     #[serde(default)]
     pub payloads: Vec<PayloadSpec>,
@@ -349,6 +355,109 @@ pub struct AnalysisSpec {
 
 fn default_true() -> bool {
     true
+}
+
+/// `[robots.log]`: whether and how often a robot's per-step channels are
+/// logged. Written as a bool (`log = false`) or as a table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotLogSpec {
+    /// Per-step channels are written. Default true.
+    pub enabled: bool,
+    /// The robot's own log rate (Hz dividing the step rate, or `"full"`);
+    /// default: the world's (`world.log_rate_hz`, `--log-rate`).
+    pub rate_hz: Option<LogRateSpec>,
+}
+
+impl Default for RobotLogSpec {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            rate_hz: None,
+        }
+    }
+}
+
+/// The table form of [`RobotLogSpec`].
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RobotLogTable {
+    /// Per-step channels are written. Default true.
+    #[serde(default = "default_true")]
+    pub enabled: bool,
+    /// The robot's log rate (Hz dividing the step rate, or `"full"`).
+    pub rate_hz: Option<LogRateSpec>,
+}
+
+/// What a robot's `log` may be written as (for the JSON Schema).
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(untagged)]
+#[expect(
+    dead_code,
+    reason = "only describes the accepted shapes in the JSON Schema"
+)]
+enum RobotLogToml {
+    /// `log = false` / `log = true`.
+    Flag(bool),
+    /// `[robots.log]` with `enabled` and `rate_hz`.
+    Table(RobotLogTable),
+}
+
+impl<'de> Deserialize<'de> for RobotLogSpec {
+    /// A bool or a [`RobotLogTable`], with the table's own errors (unknown
+    /// key, bad rate) located at its keys.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = RobotLogSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("true, false or a table { enabled, rate_hz }")
+            }
+            fn visit_bool<E: serde::de::Error>(self, b: bool) -> Result<RobotLogSpec, E> {
+                Ok(RobotLogSpec {
+                    enabled: b,
+                    rate_hz: None,
+                })
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<RobotLogSpec, A::Error> {
+                let t =
+                    RobotLogTable::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(RobotLogSpec {
+                    enabled: t.enabled,
+                    rate_hz: t.rate_hz,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `[log]`: what `quadsim run` logs (`quadsim run`'s `--log-robots`,
+/// `--summary-only` override it).
+#[derive(Debug, Default, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LogSpec {
+    /// Robots whose per-step channels are logged: names or glob patterns
+    /// (`*`, `?`, `[abc]`; e.g. `"q16-00*"`). Default: every robot whose
+    /// `log` is on. A robot must match one and have `log` on.
+    pub robots: Option<Vec<String>>,
+    /// `"mcap"` (default): write `log.mcap`; `"summary"`: no log,
+    /// `summary.json` and `report.md` (without plots) only.
+    #[serde(default)]
+    pub mode: LogMode,
+}
+
+/// [`LogSpec::mode`].
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LogMode {
+    /// Write `log.mcap`.
+    #[default]
+    Mcap,
+    /// Summary only: no `log.mcap`.
+    Summary,
 }
 
 /// `[robots.controller]`. Keys beside `kind` depend on the kind.

@@ -249,6 +249,10 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
             ));
         }
         robot_names.push(&r.name);
+        if let Some(rate) = &r.log.rate_hz {
+            rate.every_steps(w.dt_s)
+                .map_err(|m| loc.at(&format!("{p}.log.rate_hz"), m))?;
+        }
         for (k, v) in &r.params {
             if !v.is_finite() {
                 return Err(loc.at(
@@ -321,6 +325,15 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
             ));
         }
         kind_keys(loc, &p, "event", &e.kind, EVENT_KINDS, &e.params)?;
+    }
+    if let Some(patterns) = &f.log.robots {
+        for (i, pat) in patterns.iter().enumerate() {
+            let kp = format!("log.robots[{i}]");
+            let m = crate::log::select::RobotPattern::new(pat).map_err(|e| loc.at(&kp, e))?;
+            if !robot_names.iter().any(|n| m.matches(n)) {
+                return Err(loc.at(&kp, format!("'{pat}' matches no robot")));
+            }
+        }
     }
     Ok(())
 }

@@ -17,8 +17,11 @@
 //! by [`finish_logging`], which runs the `Contact` and `Control` systems once
 //! more at that state, exactly as the next step would.
 //!
-//! Samples are taken when `j` is a multiple of [`Logger::every_steps`], so a
-//! run of `N` steps logs `⌊N / every⌋ + 1` samples, `t = 0` included.
+//! A robot is sampled when `j` is a multiple of its own decimation `d` (the
+//! logger's [`Logger::every_steps`] unless [`start_sampling_each`] gave it
+//! another), so a run of `N` steps logs `⌊N / d⌋ + 1` samples of it, `t = 0`
+//! included. Robots of one instant share one [`LogRecord::Step`]; a robot not
+//! due at that instant is simply absent from it.
 //!
 //! The sampling is cheap (one forward-kinematics pass, one contact
 //! evaluation and a few copies, on the steps that sample or snapshot only);
@@ -30,7 +33,8 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::system::RunSystemOnce;
 use glam::{DQuat, DVec3};
 use quadsim_components::{
-    ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, describe_robot,
+    ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, SimThreadPool,
+    describe_robot,
 };
 use quadsim_engine::contact::{ContactEval, contact_forces};
 use quadsim_engine::description::RobotDescription;
@@ -260,8 +264,13 @@ pub enum LogRecord {
 struct Followed {
     entity: Entity,
     logged: bool,
+    /// Steps between this robot's samples (≥ 1; a multiple of the logger's tick).
+    every: u64,
     /// Model the snapshot belongs to.
     model: Option<Arc<Model>>,
+    /// Model of the last [`LogRecord::Robots`] record (a robot sampled less
+    /// often than others may be recompiled between its snapshots).
+    announced: Option<Arc<Model>>,
     /// Kinematics scratch for the snapshot (the robot's own `data` is the step's).
     data: Option<Data>,
     /// Contact evaluations at the snapshot (one per contact point).
@@ -302,7 +311,9 @@ impl SampleChannel for MonitorChannel {
 /// [`start_sampling`] … [`finish_sampling`] for another channel).
 #[derive(Resource)]
 pub struct Logger<C: SampleChannel = LogChannel> {
-    /// A sample every this many steps (≥ 1).
+    /// The logger's tick (≥ 1): every robot's decimation is a multiple of it
+    /// (their greatest common divisor), so the `Publish` stage runs only on
+    /// steps that some robot samples or snapshots.
     pub every_steps: u64,
     robots: Vec<Followed>,
     sink: Box<dyn LogSink>,
@@ -345,14 +356,38 @@ pub fn start_sampling<C: SampleChannel>(
     every_steps: u64,
     robots: &[(Entity, bool)],
 ) {
+    let each: Vec<(Entity, Option<u64>)> = robots
+        .iter()
+        .map(|&(e, logged)| (e, logged.then_some(every_steps)))
+        .collect();
+    start_sampling_each::<C>(world, sink, every_steps, &each);
+}
+
+/// [`start_sampling`] with a decimation per robot: `Some(d)` samples the
+/// robot every `d` steps (`d ≥ 1`), `None` takes no per-step samples of it
+/// (it is still listed in [`LogRecord::Robots`]). `every_steps` is the
+/// decimation of the record only when no robot is sampled.
+pub fn start_sampling_each<C: SampleChannel>(
+    world: &mut World,
+    sink: Box<dyn LogSink>,
+    every_steps: u64,
+    robots: &[(Entity, Option<u64>)],
+) {
+    let tick = robots
+        .iter()
+        .filter_map(|&(_, d)| d.map(|d| d.max(1)))
+        .reduce(gcd)
+        .unwrap_or(every_steps.max(1));
     let mut logger = Logger::<C> {
-        every_steps: every_steps.max(1),
+        every_steps: tick,
         robots: robots
             .iter()
-            .map(|&(entity, logged)| Followed {
+            .map(|&(entity, every)| Followed {
                 entity,
-                logged,
+                logged: every.is_some(),
+                every: every.map_or(tick, |d| d.max(1)),
                 model: None,
+                announced: None,
                 data: None,
                 evals: Vec::new(),
                 parents: Vec::new(),
@@ -366,8 +401,13 @@ pub fn start_sampling<C: SampleChannel>(
     };
     let step = world.resource::<SimClock>().step;
     announce_if_changed(world, &mut logger, true, step);
-    snapshot(world, &mut logger);
+    snapshot(world, &mut logger, None);
     world.insert_resource(logger);
+}
+
+/// Greatest common divisor (Euclid).
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 { a } else { gcd(b, a % b) }
 }
 
 /// Ends the log: when `final_sample` is set and the current step index is a
@@ -429,7 +469,7 @@ pub fn log_step<C: SampleChannel>(world: &mut World) {
             sample_all(world, &mut logger, j);
         }
         if step.is_multiple_of(logger.every_steps) {
-            snapshot(world, &mut logger);
+            snapshot(world, &mut logger, Some(step));
         }
     });
 }
@@ -448,7 +488,7 @@ fn announce_if_changed<C: SampleChannel>(
 ) {
     let changed = logger.robots.iter().any(|r| {
         let now = robot_sim(world, r.entity).map(|s| &s.model);
-        match (now, &r.model) {
+        match (now, &r.announced) {
             (Some(a), Some(b)) => !Arc::ptr_eq(a, b),
             (None, None) => false,
             _ => true,
@@ -456,6 +496,9 @@ fn announce_if_changed<C: SampleChannel>(
     });
     if !(force || changed) {
         return;
+    }
+    for r in &mut logger.robots {
+        r.announced = robot_sim(world, r.entity).map(|s| s.model.clone());
     }
     let dt = world
         .get_resource::<quadsim_components::SimConfig>()
@@ -480,9 +523,13 @@ fn announce_if_changed<C: SampleChannel>(
     logger.sink.send(LogRecord::Robots { t_ns, robots });
 }
 
-/// Copies every followed robot's `(q, v)` (and its model) for the next sample.
-fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>) {
+/// Copies the `(q, v)` (and model) of every followed robot that samples at
+/// step index `due` (every robot with `None`) for its next sample.
+fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>, due: Option<u64>) {
     for r in &mut logger.robots {
+        if due.is_some_and(|s| !(r.logged && s.is_multiple_of(r.every))) {
+            continue;
+        }
         let Some(sim) = robot_sim(world, r.entity) else {
             r.model = None;
             continue;
@@ -499,10 +546,26 @@ fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>) {
     }
 }
 
-/// Samples every logged robot at step index `j` and sends one record.
+/// Robots sampled at one instant from which the sampling runs on the
+/// world's thread pool (fewer: serially, where a fork–join costs more).
+pub const PARALLEL_SAMPLING_MIN_ROBOTS: usize = 16;
+
+/// One robot's sampling work at an instant (see [`sample_all`]).
+struct SampleJob<'a> {
+    robot: &'a mut Followed,
+    sim: &'a RobotSim,
+    index: usize,
+    out: Option<RobotSample>,
+}
+
+/// Samples every logged robot due at step index `j` and sends one record.
+/// Robots are sampled independently (each from its own snapshot and
+/// scratch), in parallel on the world's [`SimThreadPool`] for a herd, and
+/// collected in the logger's order, so the record does not depend on the
+/// thread count.
 fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
-    let mut samples = Vec::new();
+    let mut jobs = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
     let mut index = 0;
     for r in &mut logger.robots {
@@ -511,7 +574,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
         };
         let i = index;
         index += 1;
-        if !r.logged {
+        if !(r.logged && j.is_multiple_of(r.every)) {
             continue;
         }
         if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
@@ -524,17 +587,31 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             r.parents = frame_parents(&sim.model);
             r.model = Some(sim.model.clone());
         }
-        let data = r.data.as_mut().expect("snapshot made data");
-        samples.push(sample_robot(
-            i,
+        jobs.push(SampleJob {
+            robot: r,
             sim,
+            index: i,
+            out: None,
+        });
+    }
+    let work = |job: &mut SampleJob<'_>| {
+        let r = &mut *job.robot;
+        let data = r.data.as_mut().expect("snapshot made data");
+        job.out = Some(sample_robot(
+            job.index,
+            job.sim,
             &r.q,
             &r.v,
             data,
             &mut r.evals,
             C::LINK_TRANSFORMS.then_some(&r.parents[..]),
         ));
+    };
+    match world.get_resource::<SimThreadPool>() {
+        Some(pool) if jobs.len() >= PARALLEL_SAMPLING_MIN_ROBOTS => pool.for_each(&mut jobs, work),
+        _ => jobs.iter_mut().for_each(work),
     }
+    let samples = jobs.into_iter().filter_map(|job| job.out).collect();
     logger.last_sampled = Some(j);
     logger.sink.send(LogRecord::Step {
         t_ns: step_time_ns(j, dt),
