@@ -18,6 +18,7 @@
 //! | energies | [`energy`] | (returns) |
 
 pub mod aba;
+pub mod actuator_model;
 pub mod actuators;
 pub mod com;
 pub mod contact;
