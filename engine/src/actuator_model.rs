@@ -196,7 +196,8 @@ impl ActuatorSpec {
         }
     }
 
-    /// Why the parameters are unusable, naming the field.
+    /// Why the parameters are unusable, naming the field (as the scenario
+    /// key `[robots.actuators]` spells it).
     ///
     /// # Errors
     /// `(field, message)`.
@@ -233,9 +234,9 @@ impl ActuatorSpec {
         nonneg("coulomb_nm", m.coulomb_nm)?;
         if self.kind == ActuatorKind::Servo {
             let s = &self.servo;
-            nonneg("kp_nm_per_rad", s.kp_nm_per_rad)?;
-            nonneg("kd_nms_per_rad", s.kd_nms_per_rad)?;
-            pos("rate_hz", s.rate_hz)?;
+            pos("servo_kp_nm_per_rad", s.kp_nm_per_rad)?;
+            nonneg("servo_kd_nms_per_rad", s.kd_nms_per_rad)?;
+            pos("servo_rate_hz", s.rate_hz)?;
         }
         Ok(())
     }
@@ -483,6 +484,110 @@ impl ActuatorBank {
             let (lo, hi) = m.envelope(qd);
             tau[nv0 + j] = tau[nv0 + j].clamp(lo, hi) - m.viscous_nms_per_rad * qd
                 + friction_torque(m.coulomb_nm, qd, passive.friction_epsilon);
+        }
+    }
+}
+
+/// The joint's rated speed (its velocity limit) as a share of the default
+/// motor's no-load speed: a motor is rated below its no-load speed.
+pub const RATED_OVER_NO_LOAD_SPEED: f64 = 0.75;
+
+/// The default actuator of a joint of a built-in model for a kind, given
+/// the joint's effort and velocity limits (`docs/actuators.md` gives the
+/// sources and assumptions); `None` for other models, whose motors take
+/// their stall torque and no-load speed from the joints' limits
+/// ([`ActuatorSpec::from_limits`]).
+///
+/// Every default DC motor stalls at the joint's effort limit and runs
+/// free at its velocity limit / [`RATED_OVER_NO_LOAD_SPEED`] (quad16:
+/// 100 N·m, 40 rad/s; quad12: 3 N·m, 8 rad/s, unless the model's
+/// `actuator.*` parameters change the limits).
+///
+/// - `quad16`, DC motor: N = 10 with a 1·10⁻⁴ kg·m² rotor (reflected
+///   0.01 kg·m²), 0.1 N·m·s/rad viscous and 0.5 N·m Coulomb friction,
+///   100 Hz torque bandwidth, no latency. Servo: the same motor under a
+///   1 kHz PD of 300 N·m/rad and 5 N·m·s/rad.
+/// - `quad12`, DC motor: a hobby servo's motor and gear train, N = 250 with
+///   a 5·10⁻⁸ kg·m² rotor (reflected 3.1·10⁻³ kg·m²), 0.02 N·m Coulomb
+///   friction, 200 Hz bandwidth, no latency. Servo: Study B's Futaba S3003
+///   at 6 V whatever the joint's limits: τ_s = 0.3 N·m, ω₀ = 60°/0.19 s =
+///   5.51 rad/s, the same gear train, a 300 Hz PD of 1.72 N·m/rad (full
+///   torque at 10° of error) and 0.05 N·m·s/rad.
+pub fn model_defaults(
+    model_name: &str,
+    kind: ActuatorKind,
+    effort_limit: f64,
+    velocity_limit: f64,
+) -> Option<ActuatorSpec> {
+    let no_load = velocity_limit / RATED_OVER_NO_LOAD_SPEED;
+    let quad16 = MotorParams {
+        stall_torque_nm: effort_limit,
+        no_load_speed_radps: no_load,
+        gear_ratio: 10.0,
+        rotor_inertia_kgm2: 1e-4,
+        viscous_nms_per_rad: 0.1,
+        coulomb_nm: 0.5,
+        bandwidth_hz: 100.0,
+        latency_ticks: 0,
+    };
+    let quad12 = MotorParams {
+        stall_torque_nm: effort_limit,
+        no_load_speed_radps: no_load,
+        gear_ratio: 250.0,
+        rotor_inertia_kgm2: 5e-8,
+        viscous_nms_per_rad: 0.0,
+        coulomb_nm: 0.02,
+        bandwidth_hz: 200.0,
+        latency_ticks: 0,
+    };
+    Some(match (model_name, kind) {
+        (_, ActuatorKind::Ideal) => ActuatorSpec::ideal(),
+        ("quad16", ActuatorKind::DcMotor) => ActuatorSpec::dc_motor(quad16),
+        ("quad16", ActuatorKind::Servo) => ActuatorSpec::servo(
+            quad16,
+            ServoParams {
+                kp_nm_per_rad: 300.0,
+                kd_nms_per_rad: 5.0,
+                rate_hz: 1000.0,
+            },
+        ),
+        ("quad12", ActuatorKind::DcMotor) => ActuatorSpec::dc_motor(quad12),
+        ("quad12", ActuatorKind::Servo) => ActuatorSpec::servo(
+            MotorParams {
+                stall_torque_nm: S3003_STALL_TORQUE_NM,
+                no_load_speed_radps: S3003_NO_LOAD_SPEED_RADPS,
+                ..quad12
+            },
+            ServoParams {
+                kp_nm_per_rad: S3003_STALL_TORQUE_NM / 10f64.to_radians(),
+                kd_nms_per_rad: 0.05,
+                rate_hz: 300.0,
+            },
+        ),
+        _ => return None,
+    })
+}
+
+/// Futaba S3003 stall torque (N·m): Study B's 300 N·mm at 6 V (the figure
+/// its knee is sized against; see `docs/actuators.md` for the datasheet's).
+pub const S3003_STALL_TORQUE_NM: f64 = 0.3;
+/// Futaba S3003 no-load speed at 6 V (rad/s): 0.19 s per 60° (datasheet;
+/// 0.23 s per 60° at 4.8 V).
+pub const S3003_NO_LOAD_SPEED_RADPS: f64 = std::f64::consts::FRAC_PI_3 / 0.19;
+
+impl ActuatorSpec {
+    /// A motor of this kind whose stall torque and no-load speed are a
+    /// joint's effort and velocity limits; no gear inertia, friction, lag or
+    /// latency; a servo's gains zero (to be given).
+    pub fn from_limits(kind: ActuatorKind, effort_limit: f64, velocity_limit: f64) -> Self {
+        Self {
+            kind,
+            motor: MotorParams {
+                stall_torque_nm: effort_limit,
+                no_load_speed_radps: velocity_limit,
+                ..MotorParams::unlimited()
+            },
+            servo: ServoParams::default(),
         }
     }
 }
