@@ -19,6 +19,7 @@ pub struct ActuatorStats {
     effort_limit: Vec<f64>,
     velocity_limit: Vec<f64>,
     peak_abs_torque: Vec<f64>,
+    peak_abs_demand: Vec<f64>,
     at_torque_limit_s: Vec<f64>,
     at_speed_limit_s: Vec<f64>,
     at_envelope_s: Vec<f64>,
@@ -36,6 +37,13 @@ pub struct ActuatorStats {
 pub struct JointLoad {
     /// Largest applied |τ| (N·m or N).
     pub peak_torque_nm: f64,
+    /// Largest |τ| commanded, before the limit (N·m or N): what the
+    /// controller (or a servo's own loop) asked for.
+    pub peak_demand_nm: f64,
+    /// The torque limit the shares refer to (N·m or N; +∞ when unlimited).
+    pub torque_limit_nm: f64,
+    /// The speed limit (rad/s or m/s; +∞ when unlimited).
+    pub speed_limit: f64,
     /// `peak_torque_nm` / effort limit (0 when unlimited), ≤ 1.
     pub peak_torque_share: f64,
     /// Time with the command at or beyond the effort limit (s).
@@ -76,6 +84,7 @@ impl ActuatorStats {
             effort_limit: effort_limit.to_vec(),
             velocity_limit: velocity_limit.to_vec(),
             peak_abs_torque: vec![0.0; n],
+            peak_abs_demand: vec![0.0; n],
             at_torque_limit_s: vec![0.0; n],
             at_speed_limit_s: vec![0.0; n],
             at_envelope_s: vec![0.0; n],
@@ -95,6 +104,7 @@ impl ActuatorStats {
             let lim = self.effort_limit[j];
             let t = tau_cmd[j].abs();
             self.peak_abs_torque[j] = self.peak_abs_torque[j].max(t.min(lim));
+            self.peak_abs_demand[j] = self.peak_abs_demand[j].max(t);
             let at_torque = t >= lim;
             if at_torque {
                 self.at_torque_limit_s[j] += dt_s;
@@ -141,6 +151,9 @@ impl ActuatorStats {
         let joints: Vec<JointLoad> = (0..self.effort_limit.len())
             .map(|j| JointLoad {
                 peak_torque_nm: self.peak_abs_torque[j],
+                peak_demand_nm: self.peak_abs_demand[j],
+                torque_limit_nm: self.effort_limit[j],
+                speed_limit: self.velocity_limit[j],
                 peak_torque_share: share(self.peak_abs_torque[j], self.effort_limit[j]),
                 time_at_torque_limit_s: self.at_torque_limit_s[j],
                 time_at_speed_limit_s: self.at_speed_limit_s[j],
@@ -174,6 +187,7 @@ mod tests {
         s.record(&[-10.0, 0.0], &[0.0, 0.0], 0.1);
         let m = s.summary();
         assert_eq!(m.joints[0].peak_torque_nm, 10.0);
+        assert_eq!(m.joints[0].peak_demand_nm, 12.0);
         assert_eq!(m.joints[0].peak_torque_share, 1.0);
         assert!((m.joints[0].time_at_torque_limit_s - 0.2).abs() < 1e-12);
         assert!((m.joints[0].time_at_speed_limit_s - 0.1).abs() < 1e-12);

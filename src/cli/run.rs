@@ -738,6 +738,11 @@ pub fn metrics_json(name: &str, joint_names: &[String], m: &MetricsSummary) -> V
     })
 }
 
+/// A limit for JSON: `null` when unlimited (JSON has no infinity).
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
 /// The actuator kind of joint `j` as `[robots.actuators]` spells it.
 fn actuator_kind(r: &quadsim_components::RobotSim, j: usize) -> &'static str {
     use quadsim_engine::actuator_model::ActuatorKind;
@@ -784,6 +789,9 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
                 "peak_torque_share": l.peak_torque_share,
                 "time_at_torque_limit_s": l.time_at_torque_limit_s,
                 "time_at_speed_limit_s": l.time_at_speed_limit_s,
+                "peak_demand_nm": l.peak_demand_nm,
+                "torque_limit_nm": finite(l.torque_limit_nm),
+                "speed_limit": finite(l.speed_limit),
                 "torque_limit_hits": l.torque_limit_hits,
                 "speed_limit_hits": l.speed_limit_hits,
                 "time_at_envelope_limit_s": l.time_at_envelope_limit_s,
