@@ -385,7 +385,9 @@ impl ActuatorBank {
         let nj = self.specs.len().min(model.nv - nv0);
         tau_out.copy_from_slice(tau_cmd);
         if !self.targets_set {
+            // No target yet: a servo holds the angle it starts at.
             self.targets_rad[..nj].copy_from_slice(&q[nq0..nq0 + nj]);
+            self.targets_set = true;
         }
         if self.steps.is_multiple_of(self.control_every_steps) {
             self.push_command(&tau_cmd[nv0..nv0 + nj]);

@@ -412,6 +412,42 @@ fn servo_reaches_its_target_within_its_envelope() {
     assert!(peak_tau == stall);
 }
 
+/// A servo never given a target holds its start angle: under a constant
+/// load τ_L its steady error is τ_L / kp (the angle does not drift).
+#[test]
+fn servo_without_target_holds_its_start_angle() {
+    struct Load(f64);
+    impl ForceModel for Load {
+        fn apply(&mut self, _: &Model, _: &mut Data, _: &[f64], _: &[f64], tau: &mut [f64]) {
+            tau[0] -= self.0;
+        }
+    }
+    let servo = ServoParams {
+        kp_nm_per_rad: 2.0,
+        kd_nms_per_rad: 0.3,
+        rate_hz: 1000.0,
+    };
+    let (m, mut data, mut ws) = rig(ActuatorSpec::servo(motor(0.3, 6.0), servo), 1);
+    let mut s = State {
+        q: vec![0.5],
+        v: vec![0.0],
+    };
+    for _ in 0..10000 {
+        step(
+            &m,
+            &mut data,
+            &mut ws,
+            &mut s,
+            &[0.0],
+            5e-4,
+            Integrator::Rk4,
+            &mut Load(0.1),
+        );
+    }
+    let expected = 0.5 - 0.1 / 2.0;
+    assert!((s.q[0] - expected).abs() < 1e-6, "q = {}", s.q[0]);
+}
+
 /// A step with motors, a lag, latency and a servo allocates nothing.
 #[test]
 fn no_allocation_in_a_step_with_actuators() {
