@@ -5,6 +5,7 @@
 //! ECS data is [`quadsim_components`], and the fixed-step schedule is
 //! [`quadsim_systems`].
 
+pub mod actuators;
 pub mod analysis;
 pub mod cli;
 pub mod error;

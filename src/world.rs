@@ -245,6 +245,25 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         let root = sim
             .spawn_robot(&spawn_desc)
             .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
+        let actuators =
+            crate::actuators::joint_actuators(&loc, &p, &r.actuators, &r.model, &model)?;
+        if let Some(specs) = &actuators {
+            if let Controller::Prescribed(pc) = &controller
+                && pc.controller.params.mode == PrescribedMode::Hybrid
+            {
+                return Err(loc.at(
+                    &format!("{p}.actuators"),
+                    "motor and servo actuators need a controller that commands them; the prescribed controller's hybrid mode imposes the motion: use mode = \"pd\"",
+                ));
+            }
+            sim.world
+                .entity_mut(root)
+                .insert(quadsim_components::JointActuators {
+                    specs: specs.clone(),
+                    control_every_steps: every,
+                });
+            sim.compile();
+        }
         let mut pushes = Vec::new();
         let mut commands = Vec::new();
         for (k, e) in f
@@ -334,10 +353,17 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
             ..FallCriteria::default()
         };
         sim_r.run.metrics = MetricsAccumulator::new(yaw, 0.0);
-        sim_r.run.actuators = quadsim_engine::actuators::ActuatorStats::new(
-            &model.effort_limit[6..],
-            &model.velocity_limit[6..],
+        // A motor's limits are its stall torque and no-load speed where
+        // they are below the joint's ratings.
+        let (mut effort, mut velocity) = (
+            model.effort_limit[6..].to_vec(),
+            model.velocity_limit[6..].to_vec(),
         );
+        for (j, s) in actuators.iter().flatten().enumerate() {
+            effort[j] = effort[j].min(s.torque_limit_nm());
+            velocity[j] = velocity[j].min(s.speed_limit_radps());
+        }
+        sim_r.run.actuators = quadsim_engine::actuators::ActuatorStats::new(&effort, &velocity);
         robots_out.push((r.name.clone(), root));
     }
     sim.compile();

@@ -40,6 +40,7 @@
 //! assert_eq!(describe_robot(&world, root).unwrap().total_mass_kg(), 5.0);
 //! ```
 
+mod actuator;
 mod build;
 mod collider;
 mod external;
@@ -51,6 +52,7 @@ mod resources;
 mod robot;
 mod run;
 
+pub use actuator::JointActuators;
 pub use build::{
     CompileError, DescribeError, describe_robot, describe_robot_with_links, spawn_joint,
     spawn_link, spawn_robot, spawn_robot_with_base,

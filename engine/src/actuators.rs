@@ -6,7 +6,11 @@
 //! magnitude reaches the effort limit (the applied torque is then clamped
 //! to it), and *at its speed limit* when |q̇| reaches the velocity limit.
 //! Unlimited joints (infinite limits) are never at a limit, and their share
-//! is 0.
+//! is 0. A *hit* is an entry into a limit (a step at it after a step not at it).
+//!
+//! Joints driven by a motor model ([`crate::actuator_model`]) are also *at
+//! their envelope* in a step when the torque demanded lies outside the
+//! torque–speed envelope at the step's start speed ([`ActuatorStats::record_envelope`]).
 
 /// Accumulates [`ActuatorSummary`] step by step, without allocating after
 /// construction.
@@ -15,8 +19,16 @@ pub struct ActuatorStats {
     effort_limit: Vec<f64>,
     velocity_limit: Vec<f64>,
     peak_abs_torque: Vec<f64>,
+    peak_abs_demand: Vec<f64>,
     at_torque_limit_s: Vec<f64>,
     at_speed_limit_s: Vec<f64>,
+    at_envelope_s: Vec<f64>,
+    /// Entries into the torque limit, the speed limit and the envelope.
+    torque_hits: Vec<u64>,
+    speed_hits: Vec<u64>,
+    envelope_hits: Vec<u64>,
+    /// At the torque limit, the speed limit, the envelope in the last step.
+    was_at: Vec<[bool; 3]>,
     time_s: f64,
 }
 
@@ -25,12 +37,28 @@ pub struct ActuatorStats {
 pub struct JointLoad {
     /// Largest applied |τ| (N·m or N).
     pub peak_torque_nm: f64,
+    /// Largest |τ| commanded, before the limit (N·m or N): what the
+    /// controller (or a servo's own loop) asked for.
+    pub peak_demand_nm: f64,
+    /// The torque limit the shares refer to (N·m or N; +∞ when unlimited).
+    pub torque_limit_nm: f64,
+    /// The speed limit (rad/s or m/s; +∞ when unlimited).
+    pub speed_limit: f64,
     /// `peak_torque_nm` / effort limit (0 when unlimited), ≤ 1.
     pub peak_torque_share: f64,
     /// Time with the command at or beyond the effort limit (s).
     pub time_at_torque_limit_s: f64,
     /// Time with |q̇| at or beyond the velocity limit (s).
     pub time_at_speed_limit_s: f64,
+    /// Entries into the torque limit.
+    pub torque_limit_hits: u64,
+    /// Entries into the speed limit.
+    pub speed_limit_hits: u64,
+    /// Time with the demanded torque outside the motor's torque–speed
+    /// envelope (s; 0 for an ideal actuator).
+    pub time_at_envelope_limit_s: f64,
+    /// Entries into the envelope limit.
+    pub envelope_limit_hits: u64,
 }
 
 /// Per-joint figures over the run, and the worst of them.
@@ -44,6 +72,8 @@ pub struct ActuatorSummary {
     pub max_time_share_at_torque_limit: f64,
     /// Largest fraction of the run any joint spent at its speed limit.
     pub max_time_share_at_speed_limit: f64,
+    /// Largest fraction of the run any joint spent at its envelope limit.
+    pub max_time_share_at_envelope_limit: f64,
 }
 
 impl ActuatorStats {
@@ -54,8 +84,14 @@ impl ActuatorStats {
             effort_limit: effort_limit.to_vec(),
             velocity_limit: velocity_limit.to_vec(),
             peak_abs_torque: vec![0.0; n],
+            peak_abs_demand: vec![0.0; n],
             at_torque_limit_s: vec![0.0; n],
             at_speed_limit_s: vec![0.0; n],
+            at_envelope_s: vec![0.0; n],
+            torque_hits: vec![0; n],
+            speed_hits: vec![0; n],
+            envelope_hits: vec![0; n],
+            was_at: vec![[false; 3]; n],
             time_s: 0.0,
         }
     }
@@ -68,12 +104,31 @@ impl ActuatorStats {
             let lim = self.effort_limit[j];
             let t = tau_cmd[j].abs();
             self.peak_abs_torque[j] = self.peak_abs_torque[j].max(t.min(lim));
-            if t >= lim {
+            self.peak_abs_demand[j] = self.peak_abs_demand[j].max(t);
+            let at_torque = t >= lim;
+            if at_torque {
                 self.at_torque_limit_s[j] += dt_s;
+                self.torque_hits[j] += u64::from(!self.was_at[j][0]);
             }
-            if qd.get(j).is_some_and(|v| v.abs() >= self.velocity_limit[j]) {
+            let at_speed = qd.get(j).is_some_and(|v| v.abs() >= self.velocity_limit[j]);
+            if at_speed {
                 self.at_speed_limit_s[j] += dt_s;
+                self.speed_hits[j] += u64::from(!self.was_at[j][1]);
             }
+            self.was_at[j][0] = at_torque;
+            self.was_at[j][1] = at_speed;
+        }
+    }
+
+    /// Records, for the step of `dt_s` just recorded by [`Self::record`],
+    /// which joints' demand lay outside their motor's envelope (joint order).
+    pub fn record_envelope(&mut self, at_envelope: &[bool], dt_s: f64) {
+        for (j, &at) in at_envelope.iter().enumerate().take(self.effort_limit.len()) {
+            if at {
+                self.at_envelope_s[j] += dt_s;
+                self.envelope_hits[j] += u64::from(!self.was_at[j][2]);
+            }
+            self.was_at[j][2] = at;
         }
     }
 
@@ -96,9 +151,16 @@ impl ActuatorStats {
         let joints: Vec<JointLoad> = (0..self.effort_limit.len())
             .map(|j| JointLoad {
                 peak_torque_nm: self.peak_abs_torque[j],
+                peak_demand_nm: self.peak_abs_demand[j],
+                torque_limit_nm: self.effort_limit[j],
+                speed_limit: self.velocity_limit[j],
                 peak_torque_share: share(self.peak_abs_torque[j], self.effort_limit[j]),
                 time_at_torque_limit_s: self.at_torque_limit_s[j],
                 time_at_speed_limit_s: self.at_speed_limit_s[j],
+                torque_limit_hits: self.torque_hits[j],
+                speed_limit_hits: self.speed_hits[j],
+                time_at_envelope_limit_s: self.at_envelope_s[j],
+                envelope_limit_hits: self.envelope_hits[j],
             })
             .collect();
         let max = |f: &dyn Fn(&JointLoad) -> f64| joints.iter().map(f).fold(0.0, f64::max);
@@ -106,6 +168,7 @@ impl ActuatorStats {
             max_peak_torque_share: max(&|j| j.peak_torque_share),
             max_time_share_at_torque_limit: max(&|j| of_run(j.time_at_torque_limit_s)),
             max_time_share_at_speed_limit: max(&|j| of_run(j.time_at_speed_limit_s)),
+            max_time_share_at_envelope_limit: max(&|j| of_run(j.time_at_envelope_limit_s)),
             joints,
         }
     }
@@ -124,6 +187,7 @@ mod tests {
         s.record(&[-10.0, 0.0], &[0.0, 0.0], 0.1);
         let m = s.summary();
         assert_eq!(m.joints[0].peak_torque_nm, 10.0);
+        assert_eq!(m.joints[0].peak_demand_nm, 12.0);
         assert_eq!(m.joints[0].peak_torque_share, 1.0);
         assert!((m.joints[0].time_at_torque_limit_s - 0.2).abs() < 1e-12);
         assert!((m.joints[0].time_at_speed_limit_s - 0.1).abs() < 1e-12);
@@ -131,5 +195,22 @@ mod tests {
         assert_eq!(m.joints[1].time_at_torque_limit_s, 0.0);
         assert!((m.max_time_share_at_torque_limit - 2.0 / 3.0).abs() < 1e-12);
         assert!((m.max_time_share_at_speed_limit - 1.0 / 3.0).abs() < 1e-12);
+        // steps 2 and 3 are one stay at the torque limit: one hit
+        assert_eq!(m.joints[0].torque_limit_hits, 1);
+        assert_eq!(m.joints[0].speed_limit_hits, 1);
+        assert_eq!(m.joints[1].speed_limit_hits, 1);
+    }
+
+    #[test]
+    fn envelope_hits_count_entries() {
+        let mut s = ActuatorStats::new(&[1.0], &[1.0]);
+        for at in [true, true, false, true, false] {
+            s.record(&[0.0], &[0.0], 0.5);
+            s.record_envelope(&[at], 0.5);
+        }
+        let m = s.summary();
+        assert_eq!(m.joints[0].envelope_limit_hits, 2);
+        assert!((m.joints[0].time_at_envelope_limit_s - 1.5).abs() < 1e-12);
+        assert!((m.max_time_share_at_envelope_limit - 0.6).abs() < 1e-12);
     }
 }

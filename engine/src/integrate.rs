@@ -5,7 +5,9 @@
 //! state:
 //!
 //! 1. [`forward_kinematics`] and a cleared `data.f_ext`;
-//! 2. `τ = sat(τ_actuator) + τ_passive(q, v)` ([`crate::passive`]);
+//! 2. `τ = sat(τ_actuator) + τ_passive(q, v)` ([`crate::passive`]); with an
+//!    [`ActuatorBank`], each motor's torque inside its torque–speed envelope
+//!    at this `q̇` plus its friction ([`crate::actuator_model`]);
 //! 3. the caller's [`ForceModel`], which adds contact/push forces to `data.f_ext`
 //!    and generalised forces to `τ`;
 //! 4. [`aba_from_kinematics`] for `v̇`, or, when the workspace carries
@@ -20,6 +22,7 @@
 //! in the base frame; joints `q̇ = v`.
 
 use crate::aba::aba_from_kinematics;
+use crate::actuator_model::ActuatorBank;
 use crate::crba::crba_from_kinematics;
 use crate::data::Data;
 use crate::kinematics::forward_kinematics;
@@ -180,6 +183,9 @@ pub struct StepWorkspace {
     /// Hybrid dynamics: when set, the joints follow this motion and the
     /// actuator torques are its output, not an input (see [`ImposedJoints`]).
     pub imposed: Option<ImposedJoints>,
+    /// Joint actuator models (motor envelopes, lags, latency, servos); `None`:
+    /// every joint an ideal torque source (see [`crate::actuator_model`]).
+    pub actuators: Option<ActuatorBank>,
 }
 
 /// A joint motion imposed on the integrator (*hybrid dynamics*, Featherstone
@@ -255,6 +261,7 @@ impl StepWorkspace {
             dq: std::array::from_fn(|_| vec![0.0; nq]),
             dv: std::array::from_fn(|_| vec![0.0; nv]),
             imposed: None,
+            actuators: None,
         }
     }
 
@@ -291,7 +298,18 @@ pub fn step<F: ForceModel>(
     debug_assert_eq!(state.q.len(), model.nq);
     debug_assert_eq!(state.v.len(), model.nv);
     debug_assert_eq!(tau_actuator.len(), model.nv);
-    saturate(model, &ws.passive, tau_actuator, &mut ws.tau_actuator);
+    match &mut ws.actuators {
+        Some(bank) => bank.begin_step(
+            model,
+            &ws.passive,
+            &state.q,
+            &state.v,
+            tau_actuator,
+            dt_s,
+            &mut ws.tau_actuator,
+        ),
+        None => saturate(model, &ws.passive, tau_actuator, &mut ws.tau_actuator),
+    }
     match integrator {
         Integrator::SemiImplicitEuler => {
             let StepWorkspace {
@@ -301,6 +319,7 @@ pub fn step<F: ForceModel>(
                 q_stage,
                 dv,
                 imposed,
+                actuators,
                 ..
             } = ws;
             let [a, ..] = dv;
@@ -315,6 +334,7 @@ pub fn step<F: ForceModel>(
                 tau,
                 a,
                 imposed.as_mut().map(|m| (m, 0.0)),
+                actuators.as_ref(),
             );
             for (vi, ai) in state.v.iter_mut().zip(a.iter()) {
                 *vi += dt_s * ai;
@@ -345,6 +365,7 @@ fn rk4<F: ForceModel>(
         dq,
         dv,
         imposed,
+        actuators,
     } = ws;
     // Stage k is evaluated at y0 + c_k·dt·k_{k−1}, c = (0, ½, ½, 1).
     let c = [0.0, 0.5 * dt_s, 0.5 * dt_s, dt_s];
@@ -376,6 +397,7 @@ fn rk4<F: ForceModel>(
             tau,
             &mut dv[k],
             imposed.as_mut().map(|m| (m, c[k])),
+            actuators.as_ref(),
         );
     }
     let w = dt_s / 6.0;
@@ -408,10 +430,14 @@ fn acceleration<F: ForceModel>(
     tau: &mut [f64],
     a_out: &mut [f64],
     imposed: Option<(&mut ImposedJoints, f64)>,
+    actuators: Option<&ActuatorBank>,
 ) {
     forward_kinematics(model, data, q, v);
     data.clear_external_forces();
     tau.copy_from_slice(tau_actuator);
+    if let Some(bank) = actuators {
+        bank.apply(model, passive, v, tau);
+    }
     add_passive_torques(model, passive, q, v, tau);
     forces.apply(model, data, q, v, tau);
     match imposed {

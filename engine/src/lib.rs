@@ -19,6 +19,7 @@
 //! | energies | [`energy`] | (returns) |
 
 pub mod aba;
+pub mod actuator_model;
 pub mod actuators;
 pub mod batch;
 pub mod com;

@@ -806,6 +806,27 @@ pub fn metrics_json(name: &str, joint_names: &[String], m: &MetricsSummary) -> V
     })
 }
 
+/// A limit for JSON: `null` when unlimited (JSON has no infinity).
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+/// The actuator kind of joint `j` as `[robots.actuators]` spells it.
+fn actuator_kind(r: &quadsim_components::RobotSim, j: usize) -> &'static str {
+    use quadsim_engine::actuator_model::ActuatorKind;
+    match r
+        .workspace
+        .actuators
+        .as_ref()
+        .and_then(|b| b.specs().get(j))
+        .map(|s| s.kind)
+    {
+        Some(ActuatorKind::DcMotor) => "dc_motor",
+        Some(ActuatorKind::Servo) => "servo",
+        _ => "ideal",
+    }
+}
+
 /// Share of the run a joint may spend at its torque limit before a load
 /// counts as not carried ("saturated").
 pub const SATURATED_TIME_SHARE: f64 = 0.05;
@@ -836,6 +857,14 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
                 "peak_torque_share": l.peak_torque_share,
                 "time_at_torque_limit_s": l.time_at_torque_limit_s,
                 "time_at_speed_limit_s": l.time_at_speed_limit_s,
+                "peak_demand_nm": l.peak_demand_nm,
+                "torque_limit_nm": finite(l.torque_limit_nm),
+                "speed_limit": finite(l.speed_limit),
+                "torque_limit_hits": l.torque_limit_hits,
+                "speed_limit_hits": l.speed_limit_hits,
+                "time_at_envelope_limit_s": l.time_at_envelope_limit_s,
+                "envelope_limit_hits": l.envelope_limit_hits,
+                "kind": actuator_kind(r, j),
             })
         })
         .collect();
@@ -844,7 +873,11 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
     let command = (t > 0.0).then(|| dist / t);
     let reason = if m.fell {
         Some("fell")
-    } else if a.max_time_share_at_torque_limit > SATURATED_TIME_SHARE {
+    } else if a
+        .max_time_share_at_torque_limit
+        .max(a.max_time_share_at_envelope_limit)
+        > SATURATED_TIME_SHARE
+    {
         Some("saturated")
     } else if command.is_some_and(|c| {
         c > TRACKED_COMMAND_MIN_MPS && m.mean_forward_speed_mps < SPEED_TRACKING_FRACTION * c
@@ -862,6 +895,7 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
             "max_peak_torque_share": a.max_peak_torque_share,
             "max_time_share_at_torque_limit": a.max_time_share_at_torque_limit,
             "max_time_share_at_speed_limit": a.max_time_share_at_speed_limit,
+            "max_time_share_at_envelope_limit": a.max_time_share_at_envelope_limit,
             "joints": joints,
         }),
     );

@@ -546,6 +546,7 @@ pub fn report_markdown(
                 );
             }
         }
+        crate::report::actuators::actuator_capacity(&mut body, r);
         // footnote labels are made unique per robot: `[^k-n]`
         let prefix = format!("{}-", k + 1);
         out.push_str(&body.replace("[^", &format!("[^{prefix}")));

@@ -7,6 +7,7 @@
 //! - [`plots`]: the figures (SVG and PNG, plotters with a bundled font);
 //! - [`markdown`]: the text: run header, metrics, plots, the studies side by side.
 
+pub mod actuators;
 pub mod markdown;
 pub mod plots;
 pub mod series;

@@ -287,6 +287,26 @@ pub struct RobotSpec {
     /// Analyses run after the main run (`[robots.analysis]`).
     #[serde(default)]
     pub analysis: AnalysisSpec,
+    /// Joint actuators (`[robots.actuators]`; see `docs/actuators.md`).
+    /// Default: ideal torque sources.
+    #[serde(default)]
+    pub actuators: ActuatorsSpec,
+}
+
+/// `[robots.actuators]`: the actuator kind and parameters of every joint,
+/// with per-joint overrides in `[robots.actuators.joints.NAME]` (NAME a
+/// joint name, or `*suffix` for every joint whose name ends so). Keys are
+/// checked by `quadsim::actuators`.
+#[derive(Debug, Default, Deserialize, JsonSchema)]
+pub struct ActuatorsSpec {
+    /// Per-joint overrides, by joint name or `*suffix`; the same keys.
+    #[serde(default)]
+    #[schemars(with = "BTreeMap<String, BTreeMap<String, serde_json::Value>>")]
+    pub joints: BTreeMap<String, BTreeMap<String, toml::Value>>,
+    /// `kind` and parameters for every joint.
+    #[serde(flatten)]
+    #[schemars(with = "BTreeMap<String, serde_json::Value>")]
+    pub params: BTreeMap<String, toml::Value>,
 }
 
 /// `[[robots.payloads]]`: a uniform solid bolted to the torso (`kind =

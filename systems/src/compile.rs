@@ -13,12 +13,13 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 use quadsim_components::{
     BelongsTo, CenterOfMass, Collider, ColliderOf, CompileError, CompileFailure, ComputedInertia,
-    ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointArmature, JointConnection,
+    ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointActuators, JointArmature, JointConnection,
     JointDamping, JointFriction, JointLimits, JointPlacement, Link, LinkColliders, LinkVisuals,
     Mass, Robot, RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim,
     SimConfig, SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
 };
 use quadsim_engine::Model;
+use quadsim_engine::actuator_model::{ActuatorBank, ActuatorKind, add_reflected_inertia};
 
 /// Label of the schedule that compiles robots; [`crate::Simulation::step`]
 /// runs it before [`crate::StepSchedule`].
@@ -61,6 +62,7 @@ type RootChanged = Or<(
     Changed<RobotModelName>,
     Changed<RobotBase>,
     Changed<RobotParts>,
+    Changed<JointActuators>,
 )>;
 
 /// Components of a link entity whose change triggers a recompile.
@@ -226,6 +228,13 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
         }
     };
     model.gravity = config.gravity;
+    let actuators = world
+        .get::<JointActuators>(root)
+        .filter(|a| a.specs.len() == model.nv - model.base_nv())
+        .cloned();
+    if let Some(a) = &actuators {
+        add_reflected_inertia(&mut model, &a.specs);
+    }
     for (link, &e) in desc.links.iter().zip(&links) {
         if let Some(mut c) = world.get_mut::<ComputedInertia>(e) {
             c.0 = link.rigid_inertia().inertia_com;
@@ -235,6 +244,9 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
     let control = ControlView::of(&desc, &model, base);
     let mut sim = RobotSim::new(root, Arc::new(model), links, config.passive);
     sim.control = control;
+    sim.workspace.actuators = actuators
+        .filter(|a| !a.specs.iter().all(|s| s.kind == ActuatorKind::Ideal))
+        .map(|a| ActuatorBank::new(&a.specs, a.control_every_steps));
     let slot = world
         .get::<RobotIndex>(root)
         .map(|i| i.0)
@@ -245,6 +257,13 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
             if old.model.nq == sim.model.nq && old.model.nv == sim.model.nv {
                 std::mem::swap(&mut sim.state, &mut old.state);
                 std::mem::swap(&mut sim.tau_actuator, &mut old.tau_actuator);
+                // The same actuators go on with their lag, latency and servo states.
+                if let (Some(new), Some(prev)) =
+                    (&sim.workspace.actuators, &old.workspace.actuators)
+                    && new.specs() == prev.specs()
+                {
+                    std::mem::swap(&mut sim.workspace.actuators, &mut old.workspace.actuators);
+                }
                 // Same bodies (a payload or an inertia edit): the controller,
                 // metrics and contact points (by body) stay valid and go on.
                 if old.model.nbodies == sim.model.nbodies && old.model.parent == sim.model.parent {

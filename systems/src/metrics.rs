@@ -25,19 +25,28 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
         model,
         tau_actuator,
         run,
+        workspace,
         ..
     } = sim;
     let nv0 = model.base_nv();
     // the actuated joints (not compliant payloads')
     let nj = model.actuated_nv() - nv0;
     run.tau_joints.resize(nj, 0.0);
-    for j in 0..nj {
-        let lim = if saturate {
-            model.effort_limit[nv0 + j]
-        } else {
-            f64::INFINITY
-        };
-        run.tau_joints[j] = tau_actuator[nv0 + j].clamp(-lim, lim);
+    // With actuator models: the motors' torques at the step's start, inside
+    // their envelopes, and the envelope record.
+    let bank = workspace.actuators.as_ref();
+    match bank {
+        Some(b) => run.tau_joints.copy_from_slice(&b.applied()[..nj]),
+        None => {
+            for j in 0..nj {
+                let lim = if saturate {
+                    model.effort_limit[nv0 + j]
+                } else {
+                    f64::INFINITY
+                };
+                run.tau_joints[j] = tau_actuator[nv0 + j].clamp(-lim, lim);
+            }
+        }
     }
     let obs = &run.observation;
     let sample = StepSample {
@@ -57,8 +66,15 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
         fallen: obs.fallen,
     };
     run.metrics.record(&sample);
-    run.actuators
-        .record(&tau_actuator[nv0..nv0 + nj], &obs.qd_joints, dt_s);
+    match bank {
+        Some(b) => {
+            run.actuators.record(b.demand(), &obs.qd_joints, dt_s);
+            run.actuators.record_envelope(b.at_envelope(), dt_s);
+        }
+        None => run
+            .actuators
+            .record(&tau_actuator[nv0..nv0 + nj], &obs.qd_joints, dt_s),
+    }
     if let quadsim_components::Controller::Walker(w) = &run.controller {
         run.commanded_distance_m.0 += w.active_command().forward_mps * dt_s;
         run.commanded_distance_m.1 += dt_s;

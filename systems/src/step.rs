@@ -33,6 +33,13 @@ pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
         run,
         ..
     } = sim;
+    // Servos track the controller's joint targets.
+    if let Some(bank) = &mut workspace.actuators
+        && bank.has_servos()
+        && let Some(targets) = run.controller.joint_targets()
+    {
+        bank.set_targets(targets);
+    }
     integrate::step(
         model,
         data,

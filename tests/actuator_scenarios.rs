@@ -1,0 +1,177 @@
+//! `[robots.actuators]` in scenario files: defaults and overrides resolve
+//! per joint, bad entries get errors naming file, line and key path, and
+//! quad16 with its default DC motors trots `scenarios/trot.toml` (0.5 m/s).
+
+use std::path::Path;
+
+use quadsim::cli::run::robot_json;
+use quadsim::scenario::{ScenarioError, parse_scenario};
+use quadsim::world::{Overrides, World, build_world};
+use quadsim_engine::actuator_model::ActuatorKind;
+
+const BASE: &str = r#"format_version = 1
+[world]
+dt_s = 0.0005
+duration_s = 0.01
+default_ground = "concrete"
+
+[[robots]]
+name = "rex"
+model = "quad16"
+[robots.controller]
+kind = "joint_pd"
+kp_nm_per_rad = 300.0
+"#;
+
+fn with_actuators(table: &str) -> String {
+    BASE.replace(
+        "[robots.controller]",
+        &format!("{table}\n[robots.controller]"),
+    )
+}
+
+fn build(src: &str) -> Result<World, ScenarioError> {
+    let scn = parse_scenario(Path::new("act.toml"), src.to_string())?;
+    build_world(
+        &scn,
+        Overrides {
+            threads: 1,
+            ..Default::default()
+        },
+    )
+}
+
+fn line_of(src: &str, needle: &str) -> usize {
+    src[..src.find(needle).expect("needle")]
+        .matches('\n')
+        .count()
+        + 1
+}
+
+#[test]
+fn defaults_and_overrides_resolve_per_joint() {
+    let src = with_actuators(
+        "[robots.actuators]\nkind = \"dc_motor\"\nbandwidth_hz = 50.0\n\
+         [robots.actuators.joints.\"*_knee\"]\nstall_torque_nm = 60.0\n\
+         [robots.actuators.joints.LF_knee]\nkind = \"ideal\"\n",
+    );
+    let mut w = build(&src).unwrap();
+    let root = w.robots[0].1;
+    let sim = w.sim.robot_mut(root).unwrap();
+    let specs = sim.workspace.actuators.as_ref().unwrap().specs().to_vec();
+    let names = quadsim::cli::run::joint_names(&sim.model);
+    for (n, s) in names.iter().zip(&specs) {
+        if n == "LF_knee" {
+            assert_eq!(s.kind, ActuatorKind::Ideal, "{n}");
+            continue;
+        }
+        assert_eq!(s.kind, ActuatorKind::DcMotor, "{n}");
+        assert_eq!(s.motor.bandwidth_hz, 50.0);
+        // quad16's default set: effort limit 100 N·m, no-load 30/0.75 rad/s
+        let stall = if n.ends_with("_knee") { 60.0 } else { 100.0 };
+        assert_eq!(s.motor.stall_torque_nm, stall, "{n}");
+        assert!((s.motor.no_load_speed_radps - 40.0).abs() < 1e-12);
+    }
+    // reflected rotor inertia J N² = 1e-4 · 10² on every motor joint
+    let nv0 = sim.model.base_nv();
+    let lf_knee = names.iter().position(|n| n == "LF_knee").unwrap();
+    let rf_knee = names.iter().position(|n| n == "RF_knee").unwrap();
+    let d = sim.model.armature[nv0 + rf_knee] - sim.model.armature[nv0 + lf_knee];
+    assert!((d - 0.01).abs() < 1e-12, "{d}");
+    w.sim.run(w.steps);
+}
+
+#[test]
+fn bad_entries_name_file_line_and_key() {
+    let cases = [
+        (
+            "[robots.actuators]\nkind = \"dc_motor\"\nstal_torque_nm = 3.0\n",
+            "stal_torque_nm",
+            "robots[0].actuators.stal_torque_nm",
+            "unknown actuator key",
+        ),
+        (
+            "[robots.actuators]\nkind = \"stepper\"\n",
+            "kind = \"stepper\"",
+            "robots[0].actuators.kind",
+            "unknown actuator kind",
+        ),
+        (
+            "[robots.actuators]\nkind = \"dc_motor\"\nstall_torque_nm = -1.0\n",
+            "stall_torque_nm",
+            "robots[0].actuators.stall_torque_nm",
+            "must be > 0",
+        ),
+        (
+            "[robots.actuators]\nkind = \"dc_motor\"\n[robots.actuators.joints.LF_kne]\ncoulomb_nm = 1.0\n",
+            "[robots.actuators.joints.LF_kne]",
+            "robots[0].actuators.joints.LF_kne",
+            "names no joint",
+        ),
+        (
+            "[robots.actuators]\nkind = \"dc_motor\"\n[robots.actuators.joints.LF_knee]\nlatency_ticks = 1.5\n",
+            "latency_ticks",
+            "robots[0].actuators.joints.LF_knee.latency_ticks",
+            "integer",
+        ),
+        (
+            "[robots.actuators]\nkind = \"dc_motor\"\ngear_ratio = 0.5\n",
+            "gear_ratio",
+            "robots[0].actuators.gear_ratio",
+            "≥ 1",
+        ),
+    ];
+    for (table, needle, key, msg) in cases {
+        let src = with_actuators(table);
+        let e = build(&src).expect_err(table);
+        assert_eq!(e.key_path, key, "{e}");
+        assert_eq!(e.line, line_of(&src, needle), "{e}");
+        assert!(e.message.contains(msg), "{e}");
+        assert!(e.to_string().starts_with("act.toml:"), "{e}");
+    }
+}
+
+#[test]
+fn hybrid_prescribed_rejects_motor_actuators() {
+    let src = std::fs::read_to_string("scenarios/small_trot.toml")
+        .unwrap()
+        .replace(
+            "[robots.controller]",
+            "[robots.actuators]\nkind = \"servo\"\n\n[robots.controller]",
+        );
+    let e = build(&src).expect_err("hybrid + servo");
+    assert_eq!(e.key_path, "robots[0].actuators");
+    assert!(e.message.contains("mode = \"pd\""), "{e}");
+}
+
+/// quad16's default DC motors (100 N·m stall, 40 rad/s no-load, reflected
+/// rotor inertia, friction, 100 Hz lag) carry `trot.toml`'s 0.5 m/s trot
+/// for 10 s as the ideal sources do: no fall, the same speed within 5 %,
+/// the motors applied torques inside their envelopes.
+#[test]
+fn quad16_trots_on_its_default_dc_motors() {
+    let base = std::fs::read_to_string("scenarios/trot.toml").unwrap();
+    let mut out = Vec::new();
+    for kind in ["ideal", "dc_motor"] {
+        let src = base.replace(
+            "[robots.controller]",
+            &format!("[robots.actuators]\nkind = \"{kind}\"\n\n[robots.controller]"),
+        );
+        let mut w = build(&src).unwrap();
+        w.sim.run(w.steps);
+        let (name, root) = w.robots[0].clone();
+        out.push(robot_json(&name, w.sim.robot(root).unwrap()));
+    }
+    let (ideal, dc) = (&out[0], &out[1]);
+    let (vi, vd) = (
+        ideal["mean_forward_speed_mps"].as_f64().unwrap(),
+        dc["mean_forward_speed_mps"].as_f64().unwrap(),
+    );
+    println!("trot.toml: ideal {vi:.4} m/s, dc_motor {vd:.4} m/s");
+    assert_eq!(dc["fell"], false);
+    assert!((vd - vi).abs() < 0.05 * vi, "{vi} vs {vd}");
+    for j in dc["actuators"]["joints"].as_array().unwrap() {
+        assert_eq!(j["kind"], "dc_motor");
+        assert!(j["peak_torque_nm"].as_f64().unwrap() <= 100.0 + 1e-9);
+    }
+}
