@@ -2,21 +2,25 @@
 //! nonlinear complementary filter of Mahony, Hamel and Pflimlin (IEEE TAC
 //! 53(5), 2008, "explicit complementary filter" with bias estimation).
 //!
-//! With `R̂` the estimate (torso → world), `v̂ = R̂ᵀ e_z` the world's up
-//! direction as the estimate sees it in the torso frame and `v = f/|f|` the
-//! measured specific force's direction (up on average while the robot is
-//! supported):
+//! With `R̂` the estimate (torso → world) and `f` the measured specific
+//! force (torso frame), the reference direction is the specific force
+//! rotated into the world and low-passed there, `f̄` (time constant
+//! `accel_filter_s`): on average over a gait cycle the body does not
+//! accelerate, so `f̄` points up, whereas a trotting quad16's torso sees
+//! instantaneous specific forces of 0–3 g at up to 60° off vertical
+//! (measured), which Mahony's per-sample correction rectifies into a
+//! 0.1 rad bias. Then, in the torso frame:
 //!
 //! ```text
-//! e     = v × v̂                       (tilt error, torso frame)
+//! e     = R̂ᵀ ( f̄/|f̄| × e_z )          (tilt error; = v × v̂ of Mahony with v = R̂ᵀ f̄/|f̄|)
 //! ḃ     = −k_I e                      (gyro bias estimate)
 //! ω̂     = ω_gyro − b̂ + k_P e
 //! R̂(t+Δt) = R̂ exp(ω̂ Δt)
 //! ```
 //!
-//! The correction is skipped when `| |f| − g |` exceeds `accel_gate_mps2`
-//! (strong dynamic acceleration). Yaw is not observable from gravity: it
-//! follows the gyro alone (and drifts with its bias about z).
+//! The correction is skipped when `| |f̄| − g |` exceeds `accel_gate_mps2`.
+//! Yaw is not observable from gravity: it follows the gyro alone (and drifts
+//! with its bias about z).
 
 use glam::{DQuat, DVec3};
 
@@ -28,19 +32,22 @@ pub struct AttitudeParams {
     pub kp_radps: f64,
     /// Integral gain `k_I` (rad/s² per unit error) of the gyro bias estimate.
     pub ki_radps2: f64,
-    /// Correction only when the specific force's magnitude is within this of g (m/s²).
+    /// Correction only when the filtered specific force's magnitude is within this of g (m/s²).
     pub accel_gate_mps2: f64,
+    /// Time constant of the low-pass on the world-frame specific force (s; 0: none).
+    pub accel_filter_s: f64,
 }
 
 impl Default for AttitudeParams {
-    /// `k_P` = 1 rad/s (1 s time constant: a trot's 2 Hz body accelerations
-    /// are filtered, gyro drift is corrected within seconds), `k_I` =
-    /// 0.05 rad/s², gate 3 m/s².
+    /// `k_P` = 1 rad/s (gyro drift corrected within seconds), `k_I` =
+    /// 0.05 rad/s², gate 3 m/s², and a 0.25 s filter (half of Study A's
+    /// 0.5 s gait period; slower than `1/k_P` would let the loop ring).
     fn default() -> Self {
         AttitudeParams {
             kp_radps: 1.0,
             ki_radps2: 0.05,
             accel_gate_mps2: 3.0,
+            accel_filter_s: 0.25,
         }
     }
 }
@@ -56,6 +63,8 @@ pub struct AttitudeFilter {
     pub gyro_bias_radps: DVec3,
     /// Bias-corrected angular velocity of the last update (rad/s, torso frame).
     pub omega_radps: DVec3,
+    /// Low-passed specific force (m/s², world), `None` before the first update.
+    pub accel_world_filtered_mps2: Option<DVec3>,
 }
 
 impl AttitudeFilter {
@@ -66,6 +75,7 @@ impl AttitudeFilter {
             orientation,
             gyro_bias_radps: DVec3::ZERO,
             omega_radps: DVec3::ZERO,
+            accel_world_filtered_mps2: None,
         }
     }
 
@@ -73,11 +83,21 @@ impl AttitudeFilter {
     /// (specific force, m/s²) readings, both torso frame; `g_mps2` is |gravity|.
     pub fn update(&mut self, gyro_radps: DVec3, accel_mps2: DVec3, g_mps2: f64, dt_s: f64) {
         let p = self.params;
-        let n = accel_mps2.length();
+        let f_w = self.orientation * accel_mps2;
+        let alpha = if p.accel_filter_s > 0.0 {
+            1.0 - (-dt_s / p.accel_filter_s).exp()
+        } else {
+            1.0
+        };
+        let f_bar = match self.accel_world_filtered_mps2 {
+            Some(f) => f + alpha * (f_w - f),
+            None => f_w,
+        };
+        self.accel_world_filtered_mps2 = Some(f_bar);
+        let n = f_bar.length();
         let mut e = DVec3::ZERO;
         if n > 0.0 && (n - g_mps2).abs() <= p.accel_gate_mps2 {
-            let v_hat = self.orientation.inverse() * DVec3::Z;
-            e = (accel_mps2 / n).cross(v_hat);
+            e = self.orientation.inverse() * (f_bar / n).cross(DVec3::Z);
         }
         self.gyro_bias_radps -= p.ki_radps2 * e * dt_s;
         let w = gyro_radps - self.gyro_bias_radps + p.kp_radps * e;

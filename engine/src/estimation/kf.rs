@@ -12,7 +12,7 @@
 //! encoders and forward kinematics, torso frame):
 //!   p_fi − p      = R̂ r_i                           (every foot)
 //!   v             = −R̂ (ω × r_i + ṙ_i)              (stance feet: the foot is still)
-//!   p_fi,z        = ground height under the foot     (stance feet)
+//!   p_fi,z        = ground height + foot radius      (stance feet)
 //! ```
 //!
 //! A swing foot's process noise is `σ_swing`, so its state follows the
@@ -45,11 +45,15 @@ pub struct KfParams {
     pub foot_velocity_std_mps: f64,
     /// Stance foot height against the ground (m).
     pub foot_height_std_m: f64,
+    /// Gate on a stance foot's velocity innovation (χ², 3 dof; ≤ 0: none):
+    /// beyond it the foot is taken to slip and its velocity is not used.
+    pub velocity_gate_chi2: f64,
 }
 
 impl Default for KfParams {
     /// Cheetah-Software's figures in SI form, widened for quad16's compliant
-    /// ground contact (feet sink ~1 cm) and heavier legs.
+    /// ground contact (feet sink ~1 cm) and heavier legs; the velocity gate
+    /// at χ²₃(0.99) = 11.34.
     fn default() -> Self {
         KfParams {
             position_process_std: 0.02,
@@ -59,6 +63,7 @@ impl Default for KfParams {
             foot_position_std_m: 0.005,
             foot_velocity_std_mps: 0.1,
             foot_height_std_m: 0.01,
+            velocity_gate_chi2: 11.34,
         }
     }
 }
@@ -72,7 +77,8 @@ pub struct FootMeasurement {
     pub relative_velocity_mps: DVec3,
     /// The foot is in stance (contact sensed).
     pub stance: bool,
-    /// Ground height under the foot (m).
+    /// Height of the foot point when it stands on the ground (m): the
+    /// ground under it plus the foot sphere's radius.
     pub ground_height_m: f64,
 }
 
@@ -188,8 +194,18 @@ impl BaseKf {
                 self.update_scalar(fi + k, Some(k), m.relative_position_m[k], rp);
             }
             if m.stance {
+                // a slipping or still-landing foot moves: reject its velocity
+                // when the innovation is beyond the gate (χ² with 3 dof)
+                let z = -m.relative_velocity_mps;
+                let d = z - self.velocity_mps();
+                let mut chi2 = 0.0;
                 for k in 0..3 {
-                    self.update_scalar(3 + k, None, -m.relative_velocity_mps[k], rv);
+                    chi2 += d[k] * d[k] / (self.p[(3 + k, 3 + k)] + rv);
+                }
+                if kp.velocity_gate_chi2 <= 0.0 || chi2 <= kp.velocity_gate_chi2 {
+                    for k in 0..3 {
+                        self.update_scalar(3 + k, None, z[k], rv);
+                    }
                 }
                 self.update_scalar(fi + 2, None, m.ground_height_m, rh);
             }

@@ -15,6 +15,7 @@ pub mod kf;
 
 use glam::{DMat3, DQuat, DVec3};
 
+use crate::contact::ContactPoint;
 use crate::data::Data;
 use crate::kinematics::{base_quat, forward_kinematics};
 use crate::model::Model;
@@ -79,7 +80,7 @@ pub struct BaseEstimator {
     pub kf: BaseKf,
     /// The latest estimate.
     pub estimate: BaseEstimate,
-    feet: Vec<(usize, DVec3)>,
+    feet: Vec<ContactPoint>,
     gravity_mps2: DVec3,
     data: Data,
     q_fk: Vec<f64>,
@@ -89,13 +90,14 @@ pub struct BaseEstimator {
 }
 
 impl BaseEstimator {
-    /// An estimator for `model` whose feet are the points `feet` (body,
-    /// point in the body frame; at most [`KF_FEET`]), started at the state
+    /// An estimator for `model` whose feet are the contact spheres `feet`
+    /// (at most [`KF_FEET`]; a stance foot's sphere centre is taken to be
+    /// one radius above the ground), started at the state
     /// `(q0, v0)` at `t0_s` (the start pose is known: the odometry frame is
     /// the world frame at the start).
     pub fn new(
         model: &Model,
-        feet: &[(usize, DVec3)],
+        feet: &[ContactPoint],
         params: EstimatorParams,
         q0: &[f64],
         v0: &[f64],
@@ -103,10 +105,10 @@ impl BaseEstimator {
     ) -> Self {
         let mut data = Data::new(model);
         forward_kinematics(model, &mut data, q0, v0);
-        let feet: Vec<(usize, DVec3)> = feet.iter().take(KF_FEET).copied().collect();
+        let feet: Vec<ContactPoint> = feet.iter().take(KF_FEET).copied().collect();
         let feet_world: Vec<DVec3> = feet
             .iter()
-            .map(|&(b, p)| data.body_point_world(b, p))
+            .map(|f| data.body_point_world(f.body, f.point_in_body))
             .collect();
         let rot = data.pose[0].rot;
         let orientation = base_quat(q0);
@@ -159,9 +161,9 @@ impl BaseEstimator {
         self.q_fk[nq0..].copy_from_slice(input.q_joints_rad);
         self.v_fk[nv0..].copy_from_slice(input.qd_joints_radps);
         forward_kinematics(model, &mut self.data, &self.q_fk, &self.v_fk);
-        for (i, &(b, pt)) in self.feet.iter().enumerate() {
-            let r = self.data.body_point_world(b, pt);
-            let rd = self.data.body_point_velocity(b, pt);
+        for (i, foot) in self.feet.iter().enumerate() {
+            let r = self.data.body_point_world(foot.body, foot.point_in_body);
+            let rd = self.data.body_point_velocity(foot.body, foot.point_in_body);
             let rel = rot * r;
             let foot_guess = self.kf.position_m() + rel;
             self.meas[i] = FootMeasurement {
@@ -171,7 +173,7 @@ impl BaseEstimator {
                 ground_height_m: input
                     .terrain
                     .height(foot_guess.x, foot_guess.y)
-                    .unwrap_or(foot_guess.z),
+                    .map_or(foot_guess.z, |h| h + foot.radius_m),
             };
         }
         // 4. measurement update
@@ -216,5 +218,68 @@ impl BaseEstimator {
         v_out[3..6].copy_from_slice(&e.omega_body_radps.to_array());
         q_out[model.base_nq()..].copy_from_slice(q_joints_rad);
         v_out[model.base_nv()..].copy_from_slice(qd_joints_radps);
+    }
+}
+
+/// RMS and maximum of one error signal.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorStat {
+    /// Samples.
+    pub n: u64,
+    /// Σ e².
+    pub sum_sq: f64,
+    /// max |e|.
+    pub max: f64,
+}
+
+impl ErrorStat {
+    /// Adds one error sample.
+    pub fn record(&mut self, e: f64) {
+        self.n += 1;
+        self.sum_sq += e * e;
+        self.max = self.max.max(e.abs());
+    }
+
+    /// Root mean square (NaN before any sample).
+    pub fn rms(&self) -> f64 {
+        if self.n == 0 {
+            f64::NAN
+        } else {
+            (self.sum_sq / self.n as f64).sqrt()
+        }
+    }
+}
+
+/// Estimation error against ground truth, accumulated per estimator update.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EstimationErrors {
+    /// Orientation: angle of `R̂ᵀ R` (rad).
+    pub orientation_rad: ErrorStat,
+    /// Tilt only: angle between the estimated and true torso z axes (rad).
+    pub tilt_rad: ErrorStat,
+    /// Base velocity: `|v̂ − v|` (m/s, world).
+    pub velocity_mps: ErrorStat,
+    /// Height above ground: `|ĥ − h|` (m).
+    pub height_m: ErrorStat,
+}
+
+impl EstimationErrors {
+    /// Adds the error of `est` against the true orientation, world velocity
+    /// and height above ground.
+    pub fn record(
+        &mut self,
+        est: &BaseEstimate,
+        orientation: DQuat,
+        velocity_world_mps: DVec3,
+        height_m: f64,
+    ) {
+        self.orientation_rad
+            .record(est.orientation.angle_between(orientation));
+        let z_hat = est.orientation * DVec3::Z;
+        let z = orientation * DVec3::Z;
+        self.tilt_rad.record(z_hat.angle_between(z));
+        self.velocity_mps
+            .record((est.velocity_world_mps - velocity_world_mps).length());
+        self.height_m.record(est.height_m - height_m);
     }
 }

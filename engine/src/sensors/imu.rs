@@ -8,10 +8,11 @@
 //! - **Gyroscope**: the torso's angular velocity `ω` (rad/s, torso frame).
 //!
 //! The acceleration is the change of the origin's world velocity since the
-//! previous call divided by the time between them (the caller calls every
-//! simulation step, so it is the step's mean acceleration, what an
-//! accelerometer's anti-aliasing filter reports); the first call assumes
-//! zero acceleration. Samples come at `rate_hz` and are held in between.
+//! previous sample divided by the time between them: the mean acceleration
+//! over the sample period, what an accelerometer's anti-aliasing (averaging)
+//! filter reports; ground impacts that last a few simulation steps are
+//! averaged, not aliased. The first sample assumes zero acceleration.
+//! Samples come at `rate_hz` and are held in between.
 
 use glam::{DMat3, DVec3};
 use rand_chacha::ChaCha8Rng;
@@ -104,13 +105,13 @@ impl Imu {
         omega_body_radps: DVec3,
         gravity_mps2: DVec3,
     ) -> Option<ImuSample> {
+        let dt = self.gate.tick(t_s)?;
         if let Some((t0, v0)) = self.prev
             && t_s > t0
         {
             self.accel_true = (vel_world_mps - v0) / (t_s - t0);
         }
         self.prev = Some((t_s, vel_world_mps));
-        let dt = self.gate.tick(t_s)?;
         let f_true = rot.transpose() * (self.accel_true - gravity_mps2);
         let s = ImuSample {
             t_s,
