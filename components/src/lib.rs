@@ -50,6 +50,7 @@ mod payload;
 mod resources;
 mod robot;
 mod run;
+mod sensors;
 
 pub use build::{
     CompileError, DescribeError, describe_robot, describe_robot_with_links, spawn_joint,
@@ -76,3 +77,4 @@ pub use robot::{
 pub use run::{
     ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, PrescribedRun, RobotRun,
 };
+pub use sensors::{RobotSensing, StateSource};

@@ -281,6 +281,12 @@ pub struct RobotSpec {
     /// Analyses run after the main run (`[robots.analysis]`).
     #[serde(default)]
     pub analysis: AnalysisSpec,
+    /// Sensors (`[robots.sensors]`; `scenarios/README.md`, `docs/sensors.md`).
+    #[serde(default)]
+    pub sensors: super::sensing::SensorsSpec,
+    /// Base state estimator and the controller's state source (`[robots.estimator]`).
+    #[serde(default)]
+    pub estimator: super::sensing::EstimatorSpec,
 }
 
 /// `[[robots.payloads]]`: a uniform solid bolted to the torso.

@@ -5,11 +5,12 @@
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{
-    ControlRate, Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
+    ControlRate, Controller, RobotBatch, RobotSensing, RobotSim, SimClock, SimConfig, SimThreadPool,
 };
 use quadsim_engine::contact::evaluate;
 use quadsim_engine::control::prescribed::PrescribedMode;
 use quadsim_engine::control::walker::WalkerInput;
+use quadsim_engine::integrate::State;
 use quadsim_engine::kinematics::forward_kinematics;
 
 /// Runs every robot's controller on controller ticks.
@@ -44,11 +45,13 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
         tau_actuator,
         workspace,
         run,
+        sensing,
         ..
     } = sim;
     let Controller::Prescribed(p) = &mut run.controller else {
         return;
     };
+    let (q, v) = read_state(sensing, state);
     let nv0 = model.base_nv();
     let nq0 = model.base_nq();
     match p.controller.params.mode {
@@ -63,14 +66,22 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
             if tick {
                 p.controller.update_reference(model, t_s);
                 tau_actuator[..nv0].fill(0.0);
-                p.controller.pd_torques(
-                    model,
-                    &state.q[nq0..],
-                    &state.v[nv0..],
-                    &mut tau_actuator[nv0..],
-                );
+                p.controller
+                    .pd_torques(model, &q[nq0..], &v[nv0..], &mut tau_actuator[nv0..]);
             }
         }
+    }
+}
+
+/// The `(q, v)` a controller reads: the sensed state when the robot
+/// controls on its estimate, else ground truth.
+fn read_state<'a>(
+    sensing: &'a Option<Box<RobotSensing>>,
+    state: &'a State,
+) -> (&'a [f64], &'a [f64]) {
+    match sensing.as_deref() {
+        Some(s) if s.controls_on_estimate() => (&s.q, &s.v),
+        _ => (&state.q, &state.v),
     }
 }
 
@@ -95,28 +106,38 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             tau_actuator,
             contact,
             run,
+            sensing,
             ..
         } = sim;
         let Controller::Walker(w) = &mut run.controller else {
             unreachable!()
         };
-        forward_kinematics(model, data, &state.q, &state.v);
         let n = run.n_feet.min(4);
         let mut contacts = [false; 4];
         let mut normals = [glam::DVec3::Z; 4];
-        // Contact flags at the controller's own instant (the `Contact` stage
-        // updates the persistent states later in this step): a pure
-        // evaluation, no anchor is moved.
-        for i in 0..n {
-            let e = evaluate(
-                &contact.points[i],
-                data,
-                &contact.terrain,
-                &contact.states[i],
-            );
-            contacts[i] = e.active;
-            if e.active {
-                normals[i] = e.normal;
+        let (q, v) = read_state(sensing, state);
+        if let Some(s) = sensing.as_deref().filter(|s| s.controls_on_estimate()) {
+            // Sensed contacts; the ground normal under each foot is taken
+            // as vertical (the estimator knows no contact geometry).
+            for i in 0..n.min(s.contacts.len()) {
+                contacts[i] = s.contacts[i];
+            }
+        } else {
+            // Ground truth: contact flags at the controller's own instant
+            // (the `Contact` stage updates the persistent states later in
+            // this step): a pure evaluation, no anchor is moved.
+            forward_kinematics(model, data, &state.q, &state.v);
+            for i in 0..n {
+                let e = evaluate(
+                    &contact.points[i],
+                    data,
+                    &contact.terrain,
+                    &contact.states[i],
+                );
+                contacts[i] = e.active;
+                if e.active {
+                    normals[i] = e.normal;
+                }
             }
         }
         let nb = model.base_nv();
@@ -127,14 +148,7 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             contacts: &contacts[..n],
             normals: &normals[..n],
         };
-        w.tick(
-            model,
-            data,
-            &state.q,
-            &state.v,
-            &input,
-            &mut tau_actuator[nb..],
-        );
+        w.tick(model, data, q, v, &input, &mut tau_actuator[nb..]);
         return;
     }
     control_robot(sim);
@@ -144,25 +158,18 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
 pub fn control_robot(sim: &mut RobotSim) {
     let nb = sim.model.base_nv();
     let (nq0, nv0) = (sim.model.base_nq(), nb);
+    let (q, v) = read_state(&sim.sensing, &sim.state);
     match &sim.run.controller {
         Controller::None | Controller::Walker(_) | Controller::Prescribed(_) => {
             sim.tau_actuator.fill(0.0)
         }
         Controller::JointPd(pd) => {
             sim.tau_actuator[..nb].fill(0.0);
-            pd.compute(
-                &sim.state.q[nq0..],
-                &sim.state.v[nv0..],
-                &mut sim.tau_actuator[nb..],
-            );
+            pd.compute(&q[nq0..], &v[nv0..], &mut sim.tau_actuator[nb..]);
         }
         Controller::External(e) => {
             sim.tau_actuator[..nb].fill(0.0);
-            e.compute(
-                &sim.state.q[nq0..],
-                &sim.state.v[nv0..],
-                &mut sim.tau_actuator[nb..],
-            );
+            e.compute(&q[nq0..], &v[nv0..], &mut sim.tau_actuator[nb..]);
         }
     }
 }

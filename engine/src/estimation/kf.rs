@@ -139,11 +139,20 @@ impl BaseKf {
             self.x[k] += self.x[3 + k] * dt_s + 0.5 * accel_world_mps2[k] * dt_s * dt_s;
             self.x[3 + k] += accel_world_mps2[k] * dt_s;
         }
-        let mut f = SMatrix::<f64, KF_N, KF_N>::identity();
+        // P ← F P Fᵀ with F = I + Δt E (E: v → p), as a row then a column
+        // operation (F is the identity but for three entries)
         for k in 0..3 {
-            f[(k, 3 + k)] = dt_s;
+            for j in 0..KF_N {
+                let a = self.p[(3 + k, j)];
+                self.p[(k, j)] += dt_s * a;
+            }
         }
-        self.p = f * self.p * f.transpose();
+        for k in 0..3 {
+            for i in 0..KF_N {
+                let a = self.p[(i, 3 + k)];
+                self.p[(i, k)] += dt_s * a;
+            }
+        }
         for k in 0..3 {
             self.p[(k, k)] += kp.position_process_std.powi(2) * dt_s;
             self.p[(3 + k, 3 + k)] += kp.accel_process_std.powi(2) * dt_s;
@@ -177,9 +186,8 @@ impl BaseKf {
         }
         let k = ph / s;
         self.x += k * (z - hx);
-        // P ← P − K (P h)ᵀ, symmetrised against round-off
+        // P ← P − K (P h)ᵀ
         self.p -= k * ph.transpose();
-        self.p = 0.5 * (self.p + self.p.transpose());
     }
 
     /// The measurement update with each foot's kinematics.
@@ -210,5 +218,7 @@ impl BaseKf {
                 self.update_scalar(fi + 2, None, m.ground_height_m, rh);
             }
         }
+        // symmetrised against round-off
+        self.p = 0.5 * (self.p + self.p.transpose());
     }
 }
