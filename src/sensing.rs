@@ -324,7 +324,7 @@ pub fn robot_sensing(
     let source = source.unwrap_or(DEFAULT_STATE_SOURCE);
     if source == StateSource::Estimated && cfg.imu.is_none() {
         return Err(loc.at(
-            &source_path,
+            &format!("{p}.sensors.imu.enabled"),
             "\"estimated\" needs the IMU (the estimator runs on it): enable [robots.sensors.imu] or read \"ground_truth\"",
         ));
     }
