@@ -103,13 +103,11 @@ fn robot(name: &str, y: f64, extra: &str) -> String {
     )
 }
 
-/// Log payloads and summaries per robot, with the sensors' own channels.
-fn logged(
-    src: &str,
-    threads: usize,
-    seed: Option<u64>,
-    tag: &str,
-) -> Vec<(String, Value, Vec<(String, Vec<u8>)>)> {
+/// Per robot (sorted by name): its summary object and its log messages (topic, bytes).
+type Logged = Vec<(String, Value, Vec<(String, Vec<u8>)>)>;
+
+/// Log payloads and summaries per robot.
+fn logged(src: &str, threads: usize, seed: Option<u64>, tag: &str) -> Logged {
     let dir = std::env::temp_dir().join(format!("quadsim-sensors-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scn = parse_scenario(&dir.join("two.toml"), src.to_string()).unwrap();

@@ -119,9 +119,8 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
         if let Some(s) = sensing.as_deref().filter(|s| s.controls_on_estimate()) {
             // Sensed contacts; the ground normal under each foot is taken
             // as vertical (the estimator knows no contact geometry).
-            for i in 0..n.min(s.contacts.len()) {
-                contacts[i] = s.contacts[i];
-            }
+            let m = n.min(s.contacts.len());
+            contacts[..m].copy_from_slice(&s.contacts[..m]);
         } else {
             // Ground truth: contact flags at the controller's own instant
             // (the `Contact` stage updates the persistent states later in
