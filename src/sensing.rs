@@ -321,7 +321,14 @@ pub fn robot_sensing(
         }
         return Ok(None);
     };
-    let source = source.unwrap_or(DEFAULT_STATE_SOURCE);
+    // An external controller is sent ground-truth frames (docs/monitor.md);
+    // its in-process PD reads the same state unless told otherwise.
+    let external = r.controller.kind.as_deref() == Some("external");
+    let source = source.unwrap_or(if external {
+        StateSource::GroundTruth
+    } else {
+        DEFAULT_STATE_SOURCE
+    });
     if source == StateSource::Estimated && cfg.imu.is_none() {
         return Err(loc.at(
             &format!("{p}.sensors.imu.enabled"),
