@@ -16,6 +16,7 @@ pub mod model_source;
 pub mod monitor;
 pub mod report;
 pub mod scenario;
+pub mod sensing;
 pub mod study;
 pub mod terrain_spec;
 pub mod urdf;

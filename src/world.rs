@@ -344,6 +344,17 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         {
             sim_r.workspace.imposed = Some(p.controller.imposed());
         }
+        sim_r.sensing = crate::sensing::robot_sensing(
+            &loc,
+            &p,
+            r,
+            &model,
+            &sim_r.contact.points[..n_feet.min(4)],
+            &sim_r.state.q,
+            &sim_r.state.v,
+            w.controller_rate_hz,
+            stream_seed(seed, &crate::sensing::sensor_stream_name(&r.name)),
+        )?;
         sim_r.run.controller = controller;
         sim_r.run.commands = commands;
         sim_r.run.n_feet = n_feet;

@@ -51,6 +51,7 @@ mod payload;
 mod resources;
 mod robot;
 mod run;
+mod sensors;
 
 pub use actuator::JointActuators;
 pub use build::{
@@ -78,3 +79,4 @@ pub use robot::{
 pub use run::{
     ControlRate, Controller, DefaultGroundPlane, FallCriteria, Observation, PrescribedRun, RobotRun,
 };
+pub use sensors::{RobotSensing, StateSource};

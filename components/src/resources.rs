@@ -131,6 +131,8 @@ pub struct RobotSim {
     pub run: RobotRun,
     /// Link entity of each frame of the model (frame `i` ↔ `link_entities[i]`).
     pub link_entities: Vec<Entity>,
+    /// Sensors, estimator and sensed state (`None`: the controller reads ground truth).
+    pub sensing: Option<Box<crate::RobotSensing>>,
     /// Debug counter: the pool worker (`rayon::current_thread_index`) that ran
     /// this robot's last step, `None` before the first.
     pub last_worker: Option<usize>,
@@ -200,6 +202,7 @@ impl RobotSim {
             contact: ContactForces::default(),
             run: RobotRun::default(),
             link_entities,
+            sensing: None,
             last_worker: None,
             control: None,
             model,

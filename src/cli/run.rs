@@ -903,6 +903,7 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
         "load".into(),
         json!({"carried": reason.is_none(), "reason": reason}),
     );
+    v["sensing"] = crate::sensing::sensing_json(r.sensing.as_deref());
     if let quadsim_components::Controller::Prescribed(p) = &r.run.controller
         && let Some(c) = &p.study_b
         && c.sim_hip.samples > 0

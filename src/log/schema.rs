@@ -200,6 +200,7 @@ impl Schema {
                     "commanded_speed_mps": {"type": ["number", "null"], "description": "a walking robot's commanded forward speed as ramped, averaged over the run (m/s); null for other controllers"},
                     "actuators": {"type": "object", "description": "per-joint load: peak_torque_nm, peak_torque_share (of the effort limit), time_at_torque_limit_s, time_at_speed_limit_s; and their maxima over the joints"},
                     "load": {"type": "object", "description": "load verdict: carried (bool) and reason (null, fell, saturated, failed to track speed)"},
+                    "sensing": {"type": "object", "description": "state_source (estimated, ground_truth) and estimation: the base estimator's error against ground truth (updates; rms and max of orientation_rad, tilt_rad, velocity_mps, height_m), null without an estimator (docs/sensors.md)"},
                 }),
             ),
             Schema::FrameTransforms => object(

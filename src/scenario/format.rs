@@ -291,6 +291,12 @@ pub struct RobotSpec {
     /// Default: ideal torque sources.
     #[serde(default)]
     pub actuators: ActuatorsSpec,
+    /// Sensors (`[robots.sensors]`; `scenarios/README.md`, `docs/sensors.md`).
+    #[serde(default)]
+    pub sensors: super::sensing::SensorsSpec,
+    /// Base state estimator and the controller's state source (`[robots.estimator]`).
+    #[serde(default)]
+    pub estimator: super::sensing::EstimatorSpec,
 }
 
 /// `[robots.actuators]`: the actuator kind and parameters of every joint,

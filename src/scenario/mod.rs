@@ -6,6 +6,7 @@
 
 pub mod format;
 pub mod herd;
+pub mod sensing;
 pub mod spans;
 pub mod validate;
 pub mod vary;

@@ -269,6 +269,7 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
                 if old.model.nbodies == sim.model.nbodies && old.model.parent == sim.model.parent {
                     std::mem::swap(&mut sim.run, &mut old.run);
                     std::mem::swap(&mut sim.contact, &mut old.contact);
+                    std::mem::swap(&mut sim.sensing, &mut old.sensing);
                 }
             } else if carry_over_loads(old, &mut sim) {
                 std::mem::swap(&mut sim.run, &mut old.run);

@@ -10,11 +10,12 @@
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{
-    ControlRate, Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
+    ControlRate, Controller, RobotBatch, RobotSensing, RobotSim, SimClock, SimConfig, SimThreadPool,
 };
 use quadsim_engine::contact::evaluate;
 use quadsim_engine::control::prescribed::PrescribedMode;
 use quadsim_engine::control::walker::WalkerInput;
+use quadsim_engine::integrate::State;
 use quadsim_engine::kinematics::forward_kinematics;
 
 /// Runs every robot's controller on controller ticks.
@@ -50,6 +51,7 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
         workspace,
         run,
         control,
+        sensing,
         ..
     } = sim;
     let Controller::Prescribed(p) = &mut run.controller else {
@@ -58,7 +60,8 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
     let (nq, nv) = (model.actuated_nq(), model.actuated_nv());
     tau_actuator[nv..].fill(0.0);
     let model = control.as_ref().map_or(&**model, |c| &*c.model);
-    let (q, v, tau_actuator) = (&state.q[..nq], &state.v[..nv], &mut tau_actuator[..nv]);
+    let (q, v) = read_state(sensing, state);
+    let (q, v, tau_actuator) = (&q[..nq], &v[..nv], &mut tau_actuator[..nv]);
     let nv0 = model.base_nv();
     let nq0 = model.base_nq();
     match p.controller.params.mode {
@@ -77,6 +80,18 @@ pub fn prescribe(sim: &mut RobotSim, t_s: f64, tick: bool) {
                     .pd_torques(model, &q[nq0..], &v[nv0..], &mut tau_actuator[nv0..]);
             }
         }
+    }
+}
+
+/// The `(q, v)` a controller reads: the sensed state when the robot
+/// controls on its estimate, else ground truth.
+fn read_state<'a>(
+    sensing: &'a Option<Box<RobotSensing>>,
+    state: &'a State,
+) -> (&'a [f64], &'a [f64]) {
+    match sensing.as_deref() {
+        Some(s) if s.controls_on_estimate() => (&s.q, &s.v),
+        _ => (&state.q, &state.v),
     }
 }
 
@@ -102,6 +117,7 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             contact,
             run,
             control,
+            sensing,
             ..
         } = sim;
         let Controller::Walker(w) = &mut run.controller else {
@@ -113,24 +129,33 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             Some(c) => (&*c.model, &mut c.data),
             None => (&**model, data),
         };
-        let (q, v, tau_actuator) = (&state.q[..nq], &state.v[..nv], &mut tau_actuator[..nv]);
-        forward_kinematics(model, data, q, v);
+        let tau_actuator = &mut tau_actuator[..nv];
         let n = run.n_feet.min(4);
         let mut contacts = [false; 4];
         let mut normals = [glam::DVec3::Z; 4];
-        // Contact flags at the controller's own instant (the `Contact` stage
-        // updates the persistent states later in this step): a pure
-        // evaluation, no anchor is moved.
-        for i in 0..n {
-            let e = evaluate(
-                &contact.points[i],
-                data,
-                &contact.terrain,
-                &contact.states[i],
-            );
-            contacts[i] = e.active;
-            if e.active {
-                normals[i] = e.normal;
+        let (q, v) = read_state(sensing, state);
+        let (q, v) = (&q[..nq], &v[..nv]);
+        if let Some(s) = sensing.as_deref().filter(|s| s.controls_on_estimate()) {
+            // Sensed contacts; the ground normal under each foot is taken
+            // as vertical (the estimator knows no contact geometry).
+            let m = n.min(s.contacts.len());
+            contacts[..m].copy_from_slice(&s.contacts[..m]);
+        } else {
+            // Ground truth: contact flags at the controller's own instant
+            // (the `Contact` stage updates the persistent states later in
+            // this step): a pure evaluation, no anchor is moved.
+            forward_kinematics(model, data, &state.q[..nq], &state.v[..nv]);
+            for i in 0..n {
+                let e = evaluate(
+                    &contact.points[i],
+                    data,
+                    &contact.terrain,
+                    &contact.states[i],
+                );
+                contacts[i] = e.active;
+                if e.active {
+                    normals[i] = e.normal;
+                }
             }
         }
         let nb = model.base_nv();
@@ -153,25 +178,18 @@ pub fn control_robot(sim: &mut RobotSim) {
     let (nq0, nv0) = (sim.model.base_nq(), nb);
     // the actuated joints only: compliant payloads' joints have no actuator
     let (nq, nv) = (sim.model.actuated_nq(), sim.model.actuated_nv());
+    let (q, v) = read_state(&sim.sensing, &sim.state);
     match &sim.run.controller {
         Controller::None | Controller::Walker(_) | Controller::Prescribed(_) => {
             sim.tau_actuator.fill(0.0)
         }
         Controller::JointPd(pd) => {
             sim.tau_actuator.fill(0.0);
-            pd.compute(
-                &sim.state.q[nq0..nq],
-                &sim.state.v[nv0..nv],
-                &mut sim.tau_actuator[nb..nv],
-            );
+            pd.compute(&q[nq0..nq], &v[nv0..nv], &mut sim.tau_actuator[nb..nv]);
         }
         Controller::External(e) => {
             sim.tau_actuator.fill(0.0);
-            e.compute(
-                &sim.state.q[nq0..nq],
-                &sim.state.v[nv0..nv],
-                &mut sim.tau_actuator[nb..nv],
-            );
+            e.compute(&q[nq0..nq], &v[nv0..nv], &mut sim.tau_actuator[nb..nv]);
         }
     }
 }

@@ -18,6 +18,7 @@ mod metrics;
 mod payload;
 mod publish;
 mod schedule;
+mod sense;
 mod simulation;
 mod step;
 
@@ -37,7 +38,8 @@ pub use payload::apply_payload_events;
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{
     SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,
-    register_dynamics, register_gait, register_integrate, register_publish,
+    register_dynamics, register_gait, register_integrate, register_publish, register_sense,
 };
+pub use sense::{sense_robot, sense_robots};
 pub use simulation::Simulation;
 pub use step::{advance_clock, step_robot, step_robots};

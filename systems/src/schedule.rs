@@ -1,4 +1,4 @@
-//! The fixed-step schedule: six named stages, chained in an explicit order.
+//! The fixed-step schedule: seven named stages, chained in an explicit order.
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
@@ -8,6 +8,7 @@ use crate::control::run_controllers;
 use crate::log::{LogChannel, MonitorChannel, log_due, log_step};
 use crate::metrics::record_metrics;
 use crate::publish::{pose_sync_due, sync_link_poses};
+use crate::sense::sense_robots;
 use crate::step::{advance_clock, step_robots};
 
 /// Label of the schedule that advances the world by one fixed step.
@@ -17,6 +18,11 @@ pub struct StepSchedule;
 /// The stages of one fixed step, run in this order (each set exists even
 /// while empty, as a hook for later systems):
 ///
+/// 0. [`Sense`](SimSystems::Sense): responsible for what the robots see:
+///    each robot's sensors sample the state the step starts from (each at
+///    its own rate), its base estimator runs on new IMU samples, and the
+///    sensed state is assembled ([`RobotSensing`](quadsim_components::RobotSensing)).
+///    First, so that the gait and the controllers of this step read it.
 /// 1. [`Gait`](SimSystems::Gait): responsible for the gait clock and phase:
 ///    which feet are in stance or swing, and the swing-foot and body targets.
 /// 2. [`Control`](SimSystems::Control): responsible for the actuator command:
@@ -41,6 +47,8 @@ pub struct StepSchedule;
 ///    streaming and logging.
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SimSystems {
+    /// Sensors and state estimation.
+    Sense,
     /// Gait clock and phase.
     Gait,
     /// Actuator commands.
@@ -57,7 +65,8 @@ pub enum SimSystems {
 
 impl SimSystems {
     /// All stages in run order.
-    pub const ALL: [SimSystems; 6] = [
+    pub const ALL: [SimSystems; 7] = [
+        SimSystems::Sense,
         SimSystems::Gait,
         SimSystems::Control,
         SimSystems::Contact,
@@ -67,7 +76,7 @@ impl SimSystems {
     ];
 }
 
-/// The step schedule: the six [`SimSystems`] chained, the built-in systems
+/// The step schedule: the seven [`SimSystems`] chained, the built-in systems
 /// registered, ambiguity detection as an error (every data conflict must be
 /// ordered on purpose).
 ///
@@ -84,6 +93,7 @@ pub fn build_step_schedule() -> Schedule {
     schedule.set_executor(SingleThreadedExecutor::new());
     schedule.configure_sets(
         (
+            SimSystems::Sense,
             SimSystems::Gait,
             SimSystems::Control,
             SimSystems::Contact,
@@ -93,6 +103,7 @@ pub fn build_step_schedule() -> Schedule {
         )
             .chain(),
     );
+    register_sense(&mut schedule);
     register_gait(&mut schedule);
     register_control(&mut schedule);
     register_contact(&mut schedule);
@@ -100,6 +111,11 @@ pub fn build_step_schedule() -> Schedule {
     register_integrate(&mut schedule);
     register_publish(&mut schedule);
     schedule
+}
+
+/// Registers [`sense_robots`]: sensors, estimator, sensed state.
+pub fn register_sense(schedule: &mut Schedule) {
+    schedule.add_systems(sense_robots.in_set(SimSystems::Sense));
 }
 
 /// Registers the gait systems (none yet: the gait planner comes in a later issue).

@@ -1,4 +1,4 @@
-//! The step schedule: six sets in a fixed order, conflicts refused, the clock.
+//! The step schedule: seven sets in a fixed order, conflicts refused, the clock.
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{SimClock, SimConfig};
@@ -28,6 +28,7 @@ fn stages_run_in_the_documented_order() {
     assert_eq!(
         SimSystems::ALL,
         [
+            SimSystems::Sense,
             SimSystems::Gait,
             SimSystems::Control,
             SimSystems::Contact,

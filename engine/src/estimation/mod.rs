@@ -1,0 +1,285 @@
+//! Base state estimation from the robot's own sensors, as open quadruped
+//! stacks do it (MIT Cheetah: Bledt et al. 2018): an attitude filter on
+//! the IMU ([`attitude`]) then a linear Kalman filter on base position and
+//! velocity with the IMU's acceleration as input and the stance feet's
+//! kinematics (encoders + forward kinematics) as measurements ([`kf`]).
+//!
+//! [`BaseEstimator::update`] runs once per IMU sample. It estimates the
+//! torso's orientation, its velocity and its height above the ground; its
+//! horizontal position is odometry (it drifts). [`BaseEstimator::write_state`]
+//! assembles the generalised `(q, v)` a controller reads. Equations and
+//! tuning: `docs/sensors.md`.
+
+pub mod attitude;
+pub mod kf;
+
+use glam::{DMat3, DQuat, DVec3};
+
+use crate::contact::ContactPoint;
+use crate::data::Data;
+use crate::kinematics::{base_quat, forward_kinematics};
+use crate::model::Model;
+use crate::terrain::{Terrain, TerrainUnion};
+
+pub use attitude::{AttitudeFilter, AttitudeParams};
+pub use kf::{BaseKf, FootMeasurement, KF_FEET, KfParams};
+
+/// Tuning of the [`BaseEstimator`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EstimatorParams {
+    /// Attitude filter gains.
+    pub attitude: AttitudeParams,
+    /// Kalman filter noise figures.
+    pub kf: KfParams,
+}
+
+/// The estimated base state.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BaseEstimate {
+    /// Time of the estimate (s).
+    pub t_s: f64,
+    /// Torso orientation (torso → world).
+    pub orientation: DQuat,
+    /// Torso origin position (m, world; x and y are odometry and drift).
+    pub position_m: DVec3,
+    /// Torso origin velocity (m/s, world).
+    pub velocity_world_mps: DVec3,
+    /// Bias-corrected angular velocity (rad/s, torso frame).
+    pub omega_body_radps: DVec3,
+    /// Torso origin height above the ground beneath the estimated position (m).
+    pub height_m: f64,
+}
+
+/// What one update reads: an IMU sample, the encoders and the contact flags.
+#[derive(Clone, Copy, Debug)]
+pub struct EstimatorInput<'a> {
+    /// Time (s).
+    pub t_s: f64,
+    /// Time since the previous update (s).
+    pub dt_s: f64,
+    /// Gyroscope (rad/s, torso frame).
+    pub gyro_radps: DVec3,
+    /// Accelerometer: specific force (m/s², torso frame).
+    pub accel_mps2: DVec3,
+    /// Measured joint angles (rad).
+    pub q_joints_rad: &'a [f64],
+    /// Measured joint velocities (rad/s).
+    pub qd_joints_radps: &'a [f64],
+    /// Sensed contact per foot.
+    pub contacts: &'a [bool],
+    /// The ground (the map the robot knows).
+    pub terrain: &'a TerrainUnion,
+}
+
+/// The base state estimator of one robot.
+#[derive(Clone, Debug)]
+pub struct BaseEstimator {
+    /// Attitude filter.
+    pub attitude: AttitudeFilter,
+    /// Position/velocity filter.
+    pub kf: BaseKf,
+    /// The latest estimate.
+    pub estimate: BaseEstimate,
+    feet: Vec<ContactPoint>,
+    gravity_mps2: DVec3,
+    data: Data,
+    q_fk: Vec<f64>,
+    v_fk: Vec<f64>,
+    meas: [FootMeasurement; KF_FEET],
+    stance: [bool; KF_FEET],
+}
+
+impl BaseEstimator {
+    /// An estimator for `model` whose feet are the contact spheres `feet`
+    /// (at most [`KF_FEET`]; a stance foot's sphere centre is taken to be
+    /// one radius above the ground), started at the state
+    /// `(q0, v0)` at `t0_s` (the start pose is known: the odometry frame is
+    /// the world frame at the start).
+    pub fn new(
+        model: &Model,
+        feet: &[ContactPoint],
+        params: EstimatorParams,
+        q0: &[f64],
+        v0: &[f64],
+        t0_s: f64,
+    ) -> Self {
+        let mut data = Data::new(model);
+        forward_kinematics(model, &mut data, q0, v0);
+        let feet: Vec<ContactPoint> = feet.iter().take(KF_FEET).copied().collect();
+        let feet_world: Vec<DVec3> = feet
+            .iter()
+            .map(|f| data.body_point_world(f.body, f.point_in_body))
+            .collect();
+        let rot = data.pose[0].rot;
+        let orientation = base_quat(q0);
+        let p0 = DVec3::new(q0[0], q0[1], q0[2]);
+        let v_world = rot * DVec3::new(v0[0], v0[1], v0[2]);
+        let mut q_fk = q0.to_vec();
+        q_fk[..7].copy_from_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+        BaseEstimator {
+            attitude: AttitudeFilter::new(params.attitude, orientation),
+            kf: BaseKf::new(params.kf, p0, v_world, &feet_world),
+            estimate: BaseEstimate {
+                t_s: t0_s,
+                orientation,
+                position_m: p0,
+                velocity_world_mps: v_world,
+                omega_body_radps: DVec3::new(v0[3], v0[4], v0[5]),
+                height_m: f64::NAN,
+            },
+            feet,
+            gravity_mps2: model.gravity,
+            data,
+            q_fk,
+            v_fk: vec![0.0; model.nv],
+            meas: [FootMeasurement::default(); KF_FEET],
+            stance: [false; KF_FEET],
+        }
+    }
+
+    /// One estimator update (call on every new IMU sample).
+    pub fn update(&mut self, model: &Model, input: &EstimatorInput<'_>) {
+        let dt = input.dt_s.max(0.0);
+        // 1. attitude
+        self.attitude.update(
+            input.gyro_radps,
+            input.accel_mps2,
+            self.gravity_mps2.length(),
+            dt,
+        );
+        let rot = DMat3::from_quat(self.attitude.orientation);
+        let omega = self.attitude.omega_radps;
+        // 2. prediction with the IMU acceleration
+        for (i, s) in self.stance.iter_mut().enumerate() {
+            *s = input.contacts.get(i).copied().unwrap_or(false);
+        }
+        let a_world = rot * input.accel_mps2 + self.gravity_mps2;
+        self.kf.predict(a_world, &self.stance, dt);
+        // 3. leg kinematics in the torso frame (base at the origin, at rest)
+        let nq0 = model.base_nq();
+        let nv0 = model.base_nv();
+        self.q_fk[nq0..].copy_from_slice(input.q_joints_rad);
+        self.v_fk[nv0..].copy_from_slice(input.qd_joints_radps);
+        forward_kinematics(model, &mut self.data, &self.q_fk, &self.v_fk);
+        for (i, foot) in self.feet.iter().enumerate() {
+            let r = self.data.body_point_world(foot.body, foot.point_in_body);
+            let rd = self.data.body_point_velocity(foot.body, foot.point_in_body);
+            let rel = rot * r;
+            let foot_guess = self.kf.position_m() + rel;
+            self.meas[i] = FootMeasurement {
+                relative_position_m: rel,
+                relative_velocity_mps: rot * (omega.cross(r) + rd),
+                stance: self.stance[i],
+                ground_height_m: input
+                    .terrain
+                    .height(foot_guess.x, foot_guess.y)
+                    .map_or(foot_guess.z, |h| h + foot.radius_m),
+            };
+        }
+        // 4. measurement update
+        let n = self.feet.len();
+        self.kf.update(&self.meas[..n]);
+        let p = self.kf.position_m();
+        let ground = input.terrain.height(p.x, p.y).unwrap_or(0.0);
+        self.estimate = BaseEstimate {
+            t_s: input.t_s,
+            orientation: self.attitude.orientation,
+            position_m: p,
+            velocity_world_mps: self.kf.velocity_mps(),
+            omega_body_radps: omega,
+            height_m: p.z - ground,
+        };
+    }
+
+    /// The generalised state a controller reads: base from the estimate,
+    /// joints from `q_joints_rad`/`qd_joints_radps` (Pinocchio's layout:
+    /// base linear and angular velocity in the torso frame).
+    pub fn write_state(
+        &self,
+        model: &Model,
+        q_joints_rad: &[f64],
+        qd_joints_radps: &[f64],
+        q_out: &mut [f64],
+        v_out: &mut [f64],
+    ) {
+        let e = &self.estimate;
+        let o = e.orientation;
+        q_out[..7].copy_from_slice(&[
+            e.position_m.x,
+            e.position_m.y,
+            e.position_m.z,
+            o.x,
+            o.y,
+            o.z,
+            o.w,
+        ]);
+        let v_body = o.inverse() * e.velocity_world_mps;
+        v_out[..3].copy_from_slice(&v_body.to_array());
+        v_out[3..6].copy_from_slice(&e.omega_body_radps.to_array());
+        q_out[model.base_nq()..].copy_from_slice(q_joints_rad);
+        v_out[model.base_nv()..].copy_from_slice(qd_joints_radps);
+    }
+}
+
+/// RMS and maximum of one error signal.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorStat {
+    /// Samples.
+    pub n: u64,
+    /// Σ e².
+    pub sum_sq: f64,
+    /// max |e|.
+    pub max: f64,
+}
+
+impl ErrorStat {
+    /// Adds one error sample.
+    pub fn record(&mut self, e: f64) {
+        self.n += 1;
+        self.sum_sq += e * e;
+        self.max = self.max.max(e.abs());
+    }
+
+    /// Root mean square (NaN before any sample).
+    pub fn rms(&self) -> f64 {
+        if self.n == 0 {
+            f64::NAN
+        } else {
+            (self.sum_sq / self.n as f64).sqrt()
+        }
+    }
+}
+
+/// Estimation error against ground truth, accumulated per estimator update.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EstimationErrors {
+    /// Orientation: angle of `R̂ᵀ R` (rad).
+    pub orientation_rad: ErrorStat,
+    /// Tilt only: angle between the estimated and true torso z axes (rad).
+    pub tilt_rad: ErrorStat,
+    /// Base velocity: `|v̂ − v|` (m/s, world).
+    pub velocity_mps: ErrorStat,
+    /// Height above ground: `|ĥ − h|` (m).
+    pub height_m: ErrorStat,
+}
+
+impl EstimationErrors {
+    /// Adds the error of `est` against the true orientation, world velocity
+    /// and height above ground.
+    pub fn record(
+        &mut self,
+        est: &BaseEstimate,
+        orientation: DQuat,
+        velocity_world_mps: DVec3,
+        height_m: f64,
+    ) {
+        self.orientation_rad
+            .record(est.orientation.angle_between(orientation));
+        let z_hat = est.orientation * DVec3::Z;
+        let z = orientation * DVec3::Z;
+        self.tilt_rad.record(z_hat.angle_between(z));
+        self.velocity_mps
+            .record((est.velocity_world_mps - velocity_world_mps).length());
+        self.height_m.record(est.height_m - height_m);
+    }
+}

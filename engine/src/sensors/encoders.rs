@@ -1,0 +1,133 @@
+//! Joint encoders: every joint's angle (rad) with noise and a resolution,
+//! and its velocity (rad/s) either by differencing the measured angles
+//! through a first-order low-pass filter (what motor drivers do) or as a
+//! noisy direct measurement.
+//!
+//! Differencing: `ω_raw = (θ_k − θ_{k−1}) / Δt`, then
+//! `ω_k = ω_{k−1} + α (ω_raw − ω_{k−1})`, `α = 1 − exp(−Δt/τ)` (the exact
+//! discretisation of `τ ω̇ + ω = ω_raw`; τ = 0: no filter). The first
+//! sample's velocity is zero.
+
+use rand_chacha::ChaCha8Rng;
+
+use super::noise::{NoiseChannel, NoiseParams, gaussian};
+use super::{RateGate, SensorStream, sensor_rng};
+
+/// Where joint velocities come from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JointVelocityMode {
+    /// Differences of the measured angles, low-passed with time constant `filter_time_constant_s` (s).
+    Differencing {
+        /// First-order filter time constant (s; 0: raw differences).
+        filter_time_constant_s: f64,
+    },
+    /// The true velocity plus white noise of standard deviation `noise_std_radps` (rad/s).
+    Direct {
+        /// White noise (rad/s).
+        noise_std_radps: f64,
+    },
+}
+
+/// Encoder configuration (the same for every joint).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EncoderParams {
+    /// Output rate (Hz).
+    pub rate_hz: f64,
+    /// Angle resolution (rad; 0: continuous). A 14-bit encoder: 2π/16384.
+    pub resolution_rad: f64,
+    /// White noise of the angle (rad).
+    pub noise_std_rad: f64,
+    /// Constant offset std of the angle (rad; calibration error, drawn once per joint).
+    pub offset_std_rad: f64,
+    /// How velocities are obtained.
+    pub velocity: JointVelocityMode,
+}
+
+impl EncoderParams {
+    /// Perfect angles and velocities at `rate_hz`.
+    pub fn ideal(rate_hz: f64) -> EncoderParams {
+        EncoderParams {
+            rate_hz,
+            resolution_rad: 0.0,
+            noise_std_rad: 0.0,
+            offset_std_rad: 0.0,
+            velocity: JointVelocityMode::Direct {
+                noise_std_radps: 0.0,
+            },
+        }
+    }
+}
+
+/// The encoders of one robot's joints.
+#[derive(Clone, Debug)]
+pub struct Encoders {
+    /// Configuration.
+    pub params: EncoderParams,
+    channels: Vec<NoiseChannel>,
+    rng: ChaCha8Rng,
+    gate: RateGate,
+    sampled: bool,
+    /// Measured angles (rad), one per joint, held between samples.
+    pub position_rad: Vec<f64>,
+    /// Measured velocities (rad/s), one per joint.
+    pub velocity_radps: Vec<f64>,
+}
+
+impl Encoders {
+    /// Encoders for `n_joints` joints; noise from the robot seed `seed`.
+    pub fn new(params: EncoderParams, n_joints: usize, seed: u64, t0_s: f64) -> Encoders {
+        let mut rng = sensor_rng(seed, SensorStream::Encoders);
+        let np = NoiseParams {
+            white_std: params.noise_std_rad,
+            bias_std: params.offset_std_rad,
+            quantum: params.resolution_rad,
+            ..NoiseParams::NONE
+        };
+        let channels = (0..n_joints)
+            .map(|_| NoiseChannel::new(np, &mut rng))
+            .collect();
+        Encoders {
+            params,
+            channels,
+            rng,
+            gate: RateGate::new(params.rate_hz, t0_s),
+            sampled: false,
+            position_rad: vec![0.0; n_joints],
+            velocity_radps: vec![0.0; n_joints],
+        }
+    }
+
+    /// Call at every simulation step with the true joint angles and
+    /// velocities at `t_s`; returns whether a new sample was taken.
+    pub fn update(&mut self, t_s: f64, q_rad: &[f64], qd_radps: &[f64]) -> bool {
+        let Some(dt) = self.gate.tick(t_s) else {
+            return false;
+        };
+        for (j, ch) in self.channels.iter_mut().enumerate() {
+            let theta = ch.sample(q_rad[j], dt, &mut self.rng);
+            let n = gaussian(&mut self.rng);
+            let w = match self.params.velocity {
+                JointVelocityMode::Direct { noise_std_radps } => qd_radps[j] + noise_std_radps * n,
+                JointVelocityMode::Differencing {
+                    filter_time_constant_s,
+                } => {
+                    if self.sampled && dt > 0.0 {
+                        let raw = (theta - self.position_rad[j]) / dt;
+                        let alpha = if filter_time_constant_s > 0.0 {
+                            1.0 - (-dt / filter_time_constant_s).exp()
+                        } else {
+                            1.0
+                        };
+                        self.velocity_radps[j] + alpha * (raw - self.velocity_radps[j])
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            self.position_rad[j] = theta;
+            self.velocity_radps[j] = w;
+        }
+        self.sampled = true;
+        true
+    }
+}

@@ -1,0 +1,117 @@
+//! The `Sense` stage: every robot's sensors sample the true state at the
+//! step's start (each at its own rate), the base estimator runs on every new
+//! IMU sample, and the sensed state the controller reads is assembled.
+//! Estimation errors against ground truth are accumulated here for the
+//! summary.
+
+use bevy_ecs::prelude::*;
+use glam::DVec3;
+use quadsim_components::{RobotBatch, RobotSim, SimClock, SimThreadPool};
+use quadsim_engine::contact::evaluate;
+use quadsim_engine::estimation::EstimatorInput;
+use quadsim_engine::kinematics::{base_quat, forward_kinematics};
+use quadsim_engine::sensors::SensorTruth;
+use quadsim_engine::terrain::Terrain as _;
+
+/// Samples every robot's sensors and runs its estimator, in parallel.
+pub fn sense_robots(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, clock: Res<SimClock>) {
+    let t = clock.time_s;
+    pool.for_each(&mut batch.sims, |sim| sense_robot(sim, t));
+}
+
+/// One robot's sensors and estimator at time `t_s` (the step's start state).
+pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
+    let RobotSim {
+        model,
+        data,
+        state,
+        contact,
+        run,
+        sensing,
+        ..
+    } = sim;
+    let Some(s) = sensing.as_deref_mut() else {
+        return;
+    };
+    forward_kinematics(model, data, &state.q, &state.v);
+    let n_feet = run.n_feet.min(contact.points.len());
+    s.foot_force_n.resize(n_feet, 0.0);
+    s.contacts.resize(n_feet, false);
+    // True normal forces at this instant: a pure evaluation (the `Contact`
+    // stage moves the anchors later in the step).
+    for i in 0..n_feet {
+        s.foot_force_n[i] = evaluate(
+            &contact.points[i],
+            data,
+            &contact.terrain,
+            &contact.states[i],
+        )
+        .normal_force_n;
+    }
+    let (nq0, nv0) = (model.base_nq(), model.base_nv());
+    let orientation = base_quat(&state.q);
+    let truth = SensorTruth {
+        t_s,
+        position_m: DVec3::new(state.q[0], state.q[1], state.q[2]),
+        orientation,
+        velocity_world_mps: data.vel[0].lin,
+        omega_body_radps: DVec3::new(state.v[3], state.v[4], state.v[5]),
+        gravity_mps2: model.gravity,
+        q_joints_rad: &state.q[nq0..],
+        qd_joints_radps: &state.v[nv0..],
+        foot_normal_force_n: &s.foot_force_n,
+    };
+    s.updates = s.suite.update(&truth);
+
+    // sensed joints and contacts (ground truth where a sensor is missing)
+    let (qj, vj): (&[f64], &[f64]) = match &s.suite.encoders {
+        Some(e) => (&e.position_rad, &e.velocity_radps),
+        None => (&state.q[nq0..], &state.v[nv0..]),
+    };
+    match &s.suite.contacts {
+        Some(c) => s.contacts.copy_from_slice(&c.in_contact[..n_feet]),
+        None => {
+            for (f, c) in s.foot_force_n.iter().zip(s.contacts.iter_mut()) {
+                *c = *f > 0.0;
+            }
+        }
+    }
+    if let (Some(est), Some(imu)) = (s.estimator.as_mut(), s.suite.imu.as_ref())
+        && s.updates.imu
+        && let Some(sample) = imu.last
+    {
+        let dt = est.estimate.t_s;
+        est.update(
+            model,
+            &EstimatorInput {
+                t_s,
+                dt_s: (t_s - dt).max(0.0),
+                gyro_radps: sample.gyro_radps,
+                accel_mps2: sample.accel_mps2,
+                q_joints_rad: qj,
+                qd_joints_radps: vj,
+                contacts: &s.contacts,
+                terrain: &contact.terrain,
+            },
+        );
+        let ground = contact
+            .terrain
+            .height(state.q[0], state.q[1])
+            .unwrap_or(f64::NAN);
+        s.errors.record(
+            &est.estimate,
+            orientation,
+            data.vel[0].lin,
+            state.q[2] - ground,
+        );
+    }
+    match &s.estimator {
+        Some(est) => est.write_state(model, qj, vj, &mut s.q, &mut s.v),
+        None => {
+            s.q[..nq0].copy_from_slice(&state.q[..nq0]);
+            s.v[..nv0].copy_from_slice(&state.v[..nv0]);
+            s.q[nq0..].copy_from_slice(qj);
+            s.v[nv0..].copy_from_slice(vj);
+        }
+    }
+}

@@ -1,0 +1,229 @@
+//! Sensors and state estimation through the whole pipeline (scenario →
+//! world → schedule → summary and log): quad16 trotting on its estimated
+//! state with the default noisy sensors, against the same trot on ground
+//! truth; determinism with noise on; the seed reaching the sensors; errors
+//! in the new keys.
+
+use std::path::Path;
+
+use quadsim::cli::run::robot_json;
+use quadsim::log::read::read_log;
+use quadsim::log::{RunOutcome, start_run_log};
+use quadsim::scenario::{ScenarioError, parse_scenario};
+use quadsim::world::{Overrides, build_world};
+use serde_json::Value;
+
+fn trot_src() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/trot.toml"))
+        .unwrap()
+}
+
+fn parse(src: &str) -> Result<quadsim::scenario::Scenario, ScenarioError> {
+    parse_scenario(Path::new("sensors_test.toml"), src.to_string())
+}
+
+/// Runs `src` (no log) and returns each robot's summary object.
+fn run(src: &str, ov: Overrides) -> Vec<Value> {
+    let scn = parse(src).unwrap();
+    let mut w = build_world(&scn, ov).unwrap();
+    w.sim.run(w.steps);
+    w.robots
+        .iter()
+        .map(|(name, e)| robot_json(name, w.sim.robot(*e).unwrap()))
+        .collect()
+}
+
+fn f(v: &Value, path: &[&str]) -> f64 {
+    let mut x = v;
+    for p in path {
+        x = match p.parse::<usize>() {
+            Ok(i) => &x[i],
+            Err(_) => &x[*p],
+        };
+    }
+    x.as_f64().unwrap_or_else(|| panic!("{path:?} in {v}"))
+}
+
+/// `scenarios/trot.toml` (quad16, 0.5 m/s, 10 s) on its estimated state with
+/// the default sensors walks without a fall, at a mean speed within
+/// 0.1 m/s of the command; its estimator stays within the bounds of
+/// `engine/tests/estimation.rs` (tilt 0.02 rad, velocity 0.1 m/s, height
+/// 0.02 m RMS). The same trot on ground truth is printed beside it
+/// (`docs/sensors.md` quotes both).
+#[test]
+fn quad16_trots_ten_seconds_on_its_estimated_state() {
+    let src = trot_src();
+    let est = &run(&src, Overrides::default())[0];
+    let gt_src = format!("{src}\n[robots.estimator]\nstate_source = \"ground_truth\"\n");
+    let gt = &run(&gt_src, Overrides::default())[0];
+    assert_eq!(est["sensing"]["state_source"], "estimated");
+    assert_eq!(gt["sensing"]["state_source"], "ground_truth");
+    for (what, r) in [("estimated", est), ("ground truth", gt)] {
+        println!(
+            "{what}: fell {} speed {:.3} m/s, height mean {:.4} p2p {:.4} m, roll [{:.3}, {:.3}] pitch [{:.3}, {:.3}] rad, joint RMS error {:.4} rad, energy {:.0} J; estimation tilt RMS {:.4} max {:.4} rad, velocity RMS {:.4} max {:.4} m/s, height RMS {:.4} max {:.4} m",
+            r["fell"],
+            f(r, &["mean_forward_speed_mps"]),
+            f(r, &["base_height_mean_m"]),
+            f(r, &["base_height_p2p_m"]),
+            f(r, &["roll_range_rad", "0"]),
+            f(r, &["roll_range_rad", "1"]),
+            f(r, &["pitch_range_rad", "0"]),
+            f(r, &["pitch_range_rad", "1"]),
+            f(r, &["joint_rms_error_rad"]),
+            f(r, &["energy_j"]),
+            f(r, &["sensing", "estimation", "tilt_rad", "rms"]),
+            f(r, &["sensing", "estimation", "tilt_rad", "max"]),
+            f(r, &["sensing", "estimation", "velocity_mps", "rms"]),
+            f(r, &["sensing", "estimation", "velocity_mps", "max"]),
+            f(r, &["sensing", "estimation", "height_m", "rms"]),
+            f(r, &["sensing", "estimation", "height_m", "max"]),
+        );
+    }
+    assert_eq!(est["fell"], false, "fell on its estimated state");
+    let speed = f(est, &["mean_forward_speed_mps"]);
+    assert!((speed - 0.5).abs() < 0.1, "speed {speed}");
+    let e = &est["sensing"]["estimation"];
+    assert!(f(e, &["tilt_rad", "rms"]) <= 0.02);
+    assert!(f(e, &["velocity_mps", "rms"]) <= 0.1);
+    assert!(f(e, &["height_m", "rms"]) <= 0.02);
+}
+
+const TWO: &str = r#"format_version = 1
+[world]
+dt_s = 0.0005
+duration_s = 0.6
+seed = 5
+controller_rate_hz = 500
+default_ground = "concrete"
+"#;
+
+fn robot(name: &str, y: f64, extra: &str) -> String {
+    format!(
+        "\n[[robots]]\nname = \"{name}\"\nmodel = \"quad16\"\nstart_xy_m = [0.0, {y}]\n[robots.controller]\nkind = \"vmc\"\nv_x_mps = 0.4\n{extra}"
+    )
+}
+
+/// Per robot (sorted by name): its summary object and its log messages (topic, bytes).
+type Logged = Vec<(String, Value, Vec<(String, Vec<u8>)>)>;
+
+/// Log payloads and summaries per robot.
+fn logged(src: &str, threads: usize, seed: Option<u64>, tag: &str) -> Logged {
+    let dir = std::env::temp_dir().join(format!("quadsim-sensors-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scn = parse_scenario(&dir.join("two.toml"), src.to_string()).unwrap();
+    let mut w = build_world(
+        &scn,
+        Overrides {
+            threads,
+            seed,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let path = dir.join("log.mcap");
+    let log = start_run_log(&scn, &mut w, &path, 4).unwrap();
+    w.sim.run(w.steps);
+    log.finish(&mut w, &RunOutcome::default()).unwrap();
+    let c = read_log(&path).unwrap();
+    let mut out: Vec<_> = w
+        .robots
+        .iter()
+        .map(|(name, e)| {
+            let prefix = format!("/{name}/");
+            let msgs = c
+                .messages
+                .iter()
+                .filter(|m| m.topic.starts_with(&prefix))
+                .map(|m| (m.topic.clone(), m.data.clone()))
+                .collect();
+            (
+                name.clone(),
+                robot_json(name, w.sim.robot(*e).unwrap()),
+                msgs,
+            )
+        })
+        .collect();
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    let _ = std::fs::remove_dir_all(dir);
+    out
+}
+
+/// With the default (noisy) sensors on: the same seed gives the same log
+/// bytes and summaries on 1 and 2 threads and with the robots in the other
+/// order; another seed changes what the sensors read (and so the run).
+#[test]
+fn noisy_sensing_is_deterministic_and_follows_the_seed() {
+    let ab = format!("{TWO}{}{}", robot("a", -0.75, ""), robot("b", 0.75, ""));
+    let ba = format!("{TWO}{}{}", robot("b", 0.75, ""), robot("a", -0.75, ""));
+    let reference = logged(&ab, 1, None, "ref");
+    assert_eq!(reference.len(), 2);
+    assert!(
+        reference
+            .iter()
+            .all(|(_, s, _)| s["sensing"]["state_source"] == "estimated")
+    );
+    assert!(logged(&ab, 2, None, "t2") == reference, "2 threads differ");
+    assert!(
+        logged(&ba, 2, None, "swap") == reference,
+        "robot order changes results"
+    );
+    let other = logged(&ab, 1, Some(6), "seed");
+    for ((name, s0, m0), (_, s1, m1)) in reference.iter().zip(&other) {
+        assert_ne!(
+            s0["sensing"]["estimation"], s1["sensing"]["estimation"],
+            "{name}: seed did not reach the sensors"
+        );
+        assert_ne!(m0, m1, "{name}: the log is the same under another seed");
+    }
+}
+
+/// The new keys are checked with file, line and key path.
+#[test]
+fn bad_sensor_keys_name_their_path() {
+    let cases = [
+        (
+            "[robots.sensors]\npreset = \"perfect\"\n",
+            "robots[0].sensors.preset",
+            "unknown preset",
+        ),
+        (
+            "[robots.sensors.imu]\naccel_noise_std_mps2 = -1.0\n",
+            "robots[0].sensors.imu.accel_noise_std_mps2",
+            "≥ 0",
+        ),
+        (
+            "[robots.sensors.contacts]\non_threshold_n = 5.0\noff_threshold_n = 8.0\n",
+            "robots[0].sensors.contacts.off_threshold_n",
+            "hysteresis",
+        ),
+        (
+            "[robots.estimator]\nstate_source = \"truth\"\n",
+            "robots[0].estimator.state_source",
+            "unknown state source",
+        ),
+        (
+            "[robots.sensors.imu]\nenabled = false\n",
+            "robots[0].sensors.imu.enabled",
+            "needs the IMU",
+        ),
+    ];
+    for (extra, path, msg) in cases {
+        let src = format!("{TWO}{}", robot("a", 0.0, extra));
+        let scn = parse(&src).unwrap();
+        let e = build_world(&scn, Overrides::default()).unwrap_err();
+        assert_eq!(e.key_path, path, "{extra}");
+        assert!(e.to_string().contains(msg), "{e}");
+        assert!(e.line > 0, "{e}: no line");
+    }
+    // ground truth needs no sensors
+    let src = format!(
+        "{TWO}{}",
+        robot(
+            "a",
+            0.0,
+            "[robots.sensors]\npreset = \"none\"\n[robots.estimator]\nstate_source = \"ground_truth\"\n"
+        )
+    );
+    let r = run(&src, Overrides::default());
+    assert_eq!(r[0]["sensing"]["estimation"], Value::Null);
+}
