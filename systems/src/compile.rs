@@ -13,10 +13,10 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 use quadsim_components::{
     BelongsTo, CenterOfMass, Collider, ColliderOf, CompileError, CompileFailure, ComputedInertia,
-    ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointActuators, JointArmature, JointConnection,
-    JointDamping, JointFriction, JointLimits, JointPlacement, Link, LinkColliders, LinkVisuals,
-    Mass, Robot, RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim,
-    SimConfig, SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
+    ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointActuators, JointArmature,
+    JointConnection, JointDamping, JointFriction, JointLimits, JointPlacement, Link, LinkColliders,
+    LinkVisuals, Mass, Robot, RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts,
+    RobotSim, SimConfig, SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
 };
 use quadsim_engine::Model;
 use quadsim_engine::actuator_model::{ActuatorBank, ActuatorKind, add_reflected_inertia};

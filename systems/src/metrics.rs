@@ -68,7 +68,8 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
     run.metrics.record(&sample);
     match bank {
         Some(b) => {
-            run.actuators.record(&b.demand()[..nj], &obs.qd_joints, dt_s);
+            run.actuators
+                .record(&b.demand()[..nj], &obs.qd_joints, dt_s);
             run.actuators.record_envelope(b.at_envelope(), dt_s);
         }
         None => run

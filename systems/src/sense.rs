@@ -28,6 +28,7 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         contact,
         run,
         sensing,
+        control,
         ..
     } = sim;
     let Some(s) = sensing.as_deref_mut() else {
@@ -49,6 +50,11 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         .normal_force_n;
     }
     let (nq0, nv0) = (model.base_nq(), model.base_nv());
+    // the actuated joints only: a compliant load's coordinates are not sensed
+    let (nq, nv) = (model.actuated_nq(), model.actuated_nv());
+    // The estimator works on the robot as its controller sees it: a compliant
+    // load frozen at rest (the control view), else the model itself.
+    let est_model = control.as_ref().map_or(&**model, |c| &*c.model);
     let orientation = base_quat(&state.q);
     let truth = SensorTruth {
         t_s,
@@ -57,8 +63,8 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         velocity_world_mps: data.vel[0].lin,
         omega_body_radps: DVec3::new(state.v[3], state.v[4], state.v[5]),
         gravity_mps2: model.gravity,
-        q_joints_rad: &state.q[nq0..],
-        qd_joints_radps: &state.v[nv0..],
+        q_joints_rad: &state.q[nq0..nq],
+        qd_joints_radps: &state.v[nv0..nv],
         foot_normal_force_n: &s.foot_force_n,
     };
     s.updates = s.suite.update(&truth);
@@ -66,7 +72,7 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
     // sensed joints and contacts (ground truth where a sensor is missing)
     let (qj, vj): (&[f64], &[f64]) = match &s.suite.encoders {
         Some(e) => (&e.position_rad, &e.velocity_radps),
-        None => (&state.q[nq0..], &state.v[nv0..]),
+        None => (&state.q[nq0..nq], &state.v[nv0..nv]),
     };
     match &s.suite.contacts {
         Some(c) => s.contacts.copy_from_slice(&c.in_contact[..n_feet]),
@@ -82,7 +88,7 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
     {
         let dt = est.estimate.t_s;
         est.update(
-            model,
+            est_model,
             &EstimatorInput {
                 t_s,
                 dt_s: (t_s - dt).max(0.0),
@@ -106,12 +112,12 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         );
     }
     match &s.estimator {
-        Some(est) => est.write_state(model, qj, vj, &mut s.q, &mut s.v),
+        Some(est) => est.write_state(est_model, qj, vj, &mut s.q, &mut s.v),
         None => {
             s.q[..nq0].copy_from_slice(&state.q[..nq0]);
             s.v[..nv0].copy_from_slice(&state.v[..nv0]);
-            s.q[nq0..].copy_from_slice(qj);
-            s.v[nv0..].copy_from_slice(vj);
+            s.q[nq0..nq].copy_from_slice(qj);
+            s.v[nv0..nv].copy_from_slice(vj);
         }
     }
 }

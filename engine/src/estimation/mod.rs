@@ -158,8 +158,11 @@ impl BaseEstimator {
         // 3. leg kinematics in the torso frame (base at the origin, at rest)
         let nq0 = model.base_nq();
         let nv0 = model.base_nv();
-        self.q_fk[nq0..].copy_from_slice(input.q_joints_rad);
-        self.v_fk[nv0..].copy_from_slice(input.qd_joints_radps);
+        // The actuated joints; a compliant load's coordinates (after them)
+        // stay at rest: the estimator sees the load frozen, as controllers do.
+        let (nj_q, nj_v) = (input.q_joints_rad.len(), input.qd_joints_radps.len());
+        self.q_fk[nq0..nq0 + nj_q].copy_from_slice(input.q_joints_rad);
+        self.v_fk[nv0..nv0 + nj_v].copy_from_slice(input.qd_joints_radps);
         forward_kinematics(model, &mut self.data, &self.q_fk, &self.v_fk);
         for (i, foot) in self.feet.iter().enumerate() {
             let r = self.data.body_point_world(foot.body, foot.point_in_body);
@@ -216,8 +219,9 @@ impl BaseEstimator {
         let v_body = o.inverse() * e.velocity_world_mps;
         v_out[..3].copy_from_slice(&v_body.to_array());
         v_out[3..6].copy_from_slice(&e.omega_body_radps.to_array());
-        q_out[model.base_nq()..].copy_from_slice(q_joints_rad);
-        v_out[model.base_nv()..].copy_from_slice(qd_joints_radps);
+        let (nq0, nv0) = (model.base_nq(), model.base_nv());
+        q_out[nq0..nq0 + q_joints_rad.len()].copy_from_slice(q_joints_rad);
+        v_out[nv0..nv0 + qd_joints_radps.len()].copy_from_slice(qd_joints_radps);
     }
 }
 
