@@ -227,3 +227,55 @@ fn bad_sensor_keys_name_their_path() {
     let r = run(&src, Overrides::default());
     assert_eq!(r[0]["sensing"]["estimation"], Value::Null);
 }
+
+/// Sensors are logged (`/<robot>/sensors`, docs/logs.md) at the log rate for
+/// a robot with sensors, and not at all for one without; what is logged is
+/// what the sensors read: encoder angles within their noise of the true
+/// joint angles, and a base estimate near the true base pose.
+#[test]
+fn sensors_are_logged_beside_the_true_state() {
+    let src = format!(
+        "{TWO}{}{}",
+        robot("a", -0.75, ""),
+        robot(
+            "b",
+            0.75,
+            "[robots.sensors]\npreset = \"none\"\n[robots.estimator]\nstate_source = \"ground_truth\"\n"
+        )
+    );
+    let logs = logged(&src, 1, None, "channel");
+    let msgs = |robot: &str, topic: &str| -> Vec<Value> {
+        let (_, _, m) = logs.iter().find(|(n, _, _)| n == robot).unwrap();
+        m.iter()
+            .filter(|(t, _)| t == &format!("/{robot}/{topic}"))
+            .map(|(_, d)| serde_json::from_slice(d).unwrap())
+            .collect()
+    };
+    let sensed = msgs("a", "sensors");
+    let states = msgs("a", "joint_states");
+    let poses = msgs("a", "base_pose");
+    assert!(!sensed.is_empty());
+    assert_eq!(sensed.len(), states.len(), "one sensors message per sample");
+    assert!(msgs("b", "sensors").is_empty(), "no sensors, no channel");
+    assert!(!msgs("b", "joint_states").is_empty());
+    let (mut worst_enc, mut sq_height, mut n) = (0.0f64, 0.0, 0.0);
+    for ((s, j), p) in sensed.iter().zip(&states).zip(&poses) {
+        let enc = s["encoder_position_rad"].as_array().unwrap();
+        let truth = j["position"].as_array().unwrap();
+        assert_eq!(enc.len(), truth.len());
+        for (e, t) in enc.iter().zip(truth) {
+            worst_enc = worst_enc.max((e.as_f64().unwrap() - t.as_f64().unwrap()).abs());
+        }
+        let z_est = s["estimate"]["position"]["z"].as_f64().unwrap();
+        let z = p["pose"]["position"]["z"].as_f64().unwrap();
+        sq_height += (z_est - z).powi(2);
+        n += 1.0;
+        assert_eq!(s["contact"].as_array().unwrap().len(), 4);
+    }
+    // 14-bit encoders with their noise (docs/sensors.md) sit well inside 0.01
+    // rad of the truth; the estimator's height error is millimetres (its RMS
+    // is in the summary) — 2 cm bounds both with a wide margin.
+    assert!(worst_enc < 0.01, "encoder error {worst_enc} rad");
+    let rms = (sq_height / n).sqrt();
+    assert!(rms < 0.02, "estimated base height RMS error {rms} m");
+}

@@ -241,11 +241,13 @@ pub enum RobotTopic {
     Feet,
     /// `/<robot>/virtual_wrench`
     VirtualWrench,
+    /// `/<robot>/sensors` (robots with sensors only)
+    Sensors,
 }
 
 impl RobotTopic {
     /// Every per-step topic, in write order.
-    pub const ALL: [RobotTopic; 8] = [
+    pub const ALL: [RobotTopic; 9] = [
         RobotTopic::BasePose,
         RobotTopic::BaseTwist,
         RobotTopic::Attitude,
@@ -254,6 +256,7 @@ impl RobotTopic {
         RobotTopic::JointCommands,
         RobotTopic::Feet,
         RobotTopic::VirtualWrench,
+        RobotTopic::Sensors,
     ];
 
     /// The topic's last path element.
@@ -267,6 +270,7 @@ impl RobotTopic {
             RobotTopic::JointCommands => "joint_commands",
             RobotTopic::Feet => "feet",
             RobotTopic::VirtualWrench => "virtual_wrench",
+            RobotTopic::Sensors => "sensors",
         }
     }
 
@@ -286,6 +290,7 @@ impl RobotTopic {
             RobotTopic::JointStates | RobotTopic::JointCommands => Schema::JointState,
             RobotTopic::Feet => Schema::FootContacts,
             RobotTopic::VirtualWrench => Schema::Wrench,
+            RobotTopic::Sensors => Schema::Sensors,
         }
     }
 }
@@ -394,6 +399,49 @@ pub fn encode_robot(
                     j.v3(t);
                 }
                 None => j.raw("null,\"torque\":null"),
+            }
+        }
+        RobotTopic::Sensors => {
+            // (the writer writes this topic only for robots with sensors)
+            let Some(x) = &s.sensing else {
+                j.raw("}");
+                return;
+            };
+            j.raw(",\"imu_accel_mps2\":");
+            match x.imu {
+                Some((a, _)) => j.v3(a),
+                None => j.raw("null"),
+            }
+            j.raw(",\"imu_gyro_radps\":");
+            match x.imu {
+                Some((_, g)) => j.v3(g),
+                None => j.raw("null"),
+            }
+            j.raw(",\"encoder_position_rad\":");
+            j.nums(x.encoder_position_rad.as_deref());
+            j.raw(",\"encoder_velocity_radps\":");
+            j.nums(x.encoder_velocity_radps.as_deref());
+            j.raw(",\"contact\":[");
+            for (i, &c) in x.contact.iter().enumerate() {
+                if i > 0 {
+                    j.raw(",");
+                }
+                j.bool(c);
+            }
+            j.raw("],\"estimate\":");
+            match &x.estimate {
+                Some(e) => {
+                    j.raw("{\"position\":");
+                    j.v3(e.position_m);
+                    j.raw(",\"orientation\":");
+                    j.quat(e.orientation);
+                    j.raw(",\"velocity\":");
+                    j.v3(e.velocity_world_mps);
+                    j.raw(",\"height_m\":");
+                    j.num(e.height_m);
+                    j.raw("}");
+                }
+                None => j.raw("null"),
             }
         }
     }

@@ -27,6 +27,8 @@ pub enum Schema {
     FootContacts,
     /// `quadsim.Wrench`: the virtual-model-control wrench.
     Wrench,
+    /// `quadsim.Sensors`: what the robot's sensors read and its base estimate.
+    Sensors,
     /// `quadsim.RobotMetrics`: the run's metrics (summary.json's robot object).
     RobotMetrics,
     /// `foxglove.FrameTransforms`: every link frame in the world.
@@ -39,7 +41,7 @@ pub enum Schema {
 
 impl Schema {
     /// Every schema.
-    pub const ALL: [Schema; 11] = [
+    pub const ALL: [Schema; 12] = [
         Schema::PoseInFrame,
         Schema::Twist,
         Schema::Attitude,
@@ -47,6 +49,7 @@ impl Schema {
         Schema::JointState,
         Schema::FootContacts,
         Schema::Wrench,
+        Schema::Sensors,
         Schema::RobotMetrics,
         Schema::FrameTransforms,
         Schema::SceneUpdate,
@@ -63,6 +66,7 @@ impl Schema {
             Schema::JointState => "quadsim.JointState",
             Schema::FootContacts => "quadsim.FootContacts",
             Schema::Wrench => "quadsim.Wrench",
+            Schema::Sensors => "quadsim.Sensors",
             Schema::RobotMetrics => "quadsim.RobotMetrics",
             Schema::FrameTransforms => "foxglove.FrameTransforms",
             Schema::SceneUpdate => "foxglove.SceneUpdate",
@@ -150,6 +154,27 @@ impl Schema {
                     "frame_id": string("Axes of the vectors: \"world\""),
                     "force": vector3_or_null("Force (N); null without virtual model control"),
                     "torque": vector3_or_null("Torque about the centre of mass (N m); null without virtual model control"),
+                }),
+            ),
+            Schema::Sensors => object(
+                "What the robot's sensors read at the sample's instant (their latest outputs, with noise) and the base state estimate (docs/sensors.md); null where the robot has no such sensor",
+                json!({
+                    "timestamp": time("Simulation time"),
+                    "imu_accel_mps2": vector3_or_null("IMU specific force (m/s^2, torso frame; +g up at rest)"),
+                    "imu_gyro_radps": vector3_or_null("IMU angular velocity (rad/s, torso frame)"),
+                    "encoder_position_rad": numbers_or_null("Joint encoder angles (rad), actuated joints in velocity order"),
+                    "encoder_velocity_radps": numbers_or_null("Joint velocity estimates (rad/s)"),
+                    "contact": {"type": "array", "items": {"type": "boolean"}, "description": "Foot contact sensors' flags (or the true contact where the robot has none), in the model's foot order"},
+                    "estimate": {
+                        "type": ["object", "null"],
+                        "description": "The base state estimator's output (null without an estimator)",
+                        "properties": {
+                            "position": vector3("Base position (m, world)"),
+                            "orientation": quaternion("Base orientation (base to world)"),
+                            "velocity": vector3("Base velocity (m/s, world)"),
+                            "height_m": number("Base height above the ground under it (m)"),
+                        },
+                    },
                 }),
             ),
             Schema::RobotMetrics => object(

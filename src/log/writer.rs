@@ -326,6 +326,9 @@ impl Output {
                         else {
                             break;
                         };
+                        if *topic == RobotTopic::Sensors && s.sensing.is_none() {
+                            continue;
+                        }
                         encode_robot(*topic, n, s, t_ns, &mut self.buf);
                         let name = tp[k].clone();
                         self.put(&name, topic.schema(), t_ns, None)?;

@@ -90,6 +90,22 @@ impl RobotInfo {
     }
 }
 
+/// What a robot's sensors read at a sample: their latest outputs (noise
+/// included) and the base estimate (`docs/sensors.md`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SensingLog {
+    /// IMU specific force (m/s²) and angular velocity (rad/s), torso frame.
+    pub imu: Option<(DVec3, DVec3)>,
+    /// Encoder angles (rad), actuated joints.
+    pub encoder_position_rad: Option<Vec<f64>>,
+    /// Encoder velocity estimates (rad/s).
+    pub encoder_velocity_radps: Option<Vec<f64>>,
+    /// Contact flags the controller reads (sensed, else true), foot order.
+    pub contact: Vec<bool>,
+    /// The base state estimate.
+    pub estimate: Option<quadsim_engine::estimation::BaseEstimate>,
+}
+
 /// One foot at the sample's instant (world frame, SI).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FootLog {
@@ -155,6 +171,8 @@ pub struct RobotSample {
     /// The virtual wrench of virtual model control at its last tick: force
     /// (N) and torque about the CoM (N·m), world axes; `None` without VMC.
     pub virtual_wrench: Option<(DVec3, DVec3)>,
+    /// The robot's sensors and estimate; `None` for a robot without sensors.
+    pub sensing: Option<SensingLog>,
     /// Every link frame (one per `model.frames` entry) in its parent frame
     /// ([`frame_parents`]; the world for the base link): translation (m) and
     /// rotation, exact from the joint angles, so fixed offsets and the zero
@@ -737,6 +755,18 @@ fn sample_robot(
         joint_velocity_desired: velocity_targets,
         feet,
         virtual_wrench,
+        sensing: sim.sensing.as_deref().map(|x| SensingLog {
+            imu: x
+                .suite
+                .imu
+                .as_ref()
+                .and_then(|i| i.last)
+                .map(|m| (m.accel_mps2, m.gyro_radps)),
+            encoder_position_rad: x.suite.encoders.as_ref().map(|e| e.position_rad.clone()),
+            encoder_velocity_radps: x.suite.encoders.as_ref().map(|e| e.velocity_radps.clone()),
+            contact: x.contacts.clone(),
+            estimate: x.estimator.as_ref().map(|e| e.estimate),
+        }),
         link_transforms: parents.map_or_else(Vec::new, |p| {
             link_transforms(model, data, q, base_orientation, p)
         }),
