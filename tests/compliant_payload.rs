@@ -150,6 +150,65 @@ fn compliant_attach_and_detach_events_carry_the_state() {
     assert!(!r.run.metrics.summary().fell);
 }
 
+/// A robot on DC motors and sensors keeps both across compliant loads: with
+/// the load attached from the start (one motor per actuated joint; the load's
+/// joints get none), and through an attach event (the motors' and sensors'
+/// states go on, as the controller's do).
+#[test]
+fn motors_and_sensors_go_on_with_a_compliant_load() {
+    let src = trot_slosh(0.5).replace(
+        "[robots.controller]",
+        "[robots.actuators]\nkind = \"dc_motor\"\n\n[robots.controller]",
+    );
+    let w = world(&src);
+    let rex = w.robots[0].1;
+    let r = w.sim.robot(rex).unwrap();
+    assert_eq!(r.model.nv, 24, "the load is attached from the start");
+    assert!(r.workspace.actuators.is_some(), "motors with the load on");
+    let attached_later = src.replace(
+        "damping_nspm = 10.05",
+        "damping_nspm = 10.05\nattached = false",
+    ) + "\n[[events]]\nt_s = 0.25\nrobot = \"rex\"\nkind = \"attach\"\npayload = \"tank\"\n";
+    let mut w = world(&attached_later);
+    let rex = w.robots[0].1;
+    w.sim.run(500); // t = 0.25 s, the attach due before the next step
+    let estimate_t = |w: &World| {
+        let r = w.sim.robot(rex).unwrap();
+        r.sensing
+            .as_ref()
+            .expect("sensors")
+            .estimator
+            .as_ref()
+            .unwrap()
+            .estimate
+            .t_s
+    };
+    let (t_before, bank_before) = {
+        let r = w.sim.robot(rex).unwrap();
+        (
+            estimate_t(&w),
+            r.workspace.actuators.clone().expect("motors"),
+        )
+    };
+    assert!(t_before > 0.2, "the estimator ran: {t_before}");
+    w.sim.compile();
+    let r = w.sim.robot(rex).unwrap();
+    assert_eq!(r.model.nv, 24);
+    assert_eq!(
+        estimate_t(&w),
+        t_before,
+        "the same sensors and estimator go on"
+    );
+    assert_eq!(
+        r.workspace.actuators.as_ref(),
+        Some(&bank_before),
+        "the same motors go on, with their states"
+    );
+    w.sim.run(200);
+    assert!(estimate_t(&w) > t_before);
+    assert!(!w.sim.robot(rex).unwrap().run.metrics.summary().fell);
+}
+
 /// Bad compliant payloads name their key (file, line and key path).
 #[test]
 fn bad_compliant_payloads_name_their_key() {

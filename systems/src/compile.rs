@@ -230,7 +230,9 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
     model.gravity = config.gravity;
     let actuators = world
         .get::<JointActuators>(root)
-        .filter(|a| a.specs.len() == model.nv - model.base_nv())
+        // one actuator per actuated joint (a compliant load's joints, after
+        // them, have none)
+        .filter(|a| a.specs.len() == model.actuated_nv() - model.base_nv())
         .cloned();
     if let Some(a) = &actuators {
         add_reflected_inertia(&mut model, &a.specs);
@@ -254,26 +256,30 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
     match slot {
         Some(i) => {
             let old = &mut batch.sims[i];
-            if old.model.nq == sim.model.nq && old.model.nv == sim.model.nv {
+            // Whether the robot's own structure is unchanged, so that its
+            // controller, metrics, contact points (by body) and sensors stay
+            // valid and go on: the same bodies (a rigid payload or an inertia
+            // edit), or only compliant payloads attached or detached.
+            let same_size = old.model.nq == sim.model.nq && old.model.nv == sim.model.nv;
+            let goes_on = if same_size {
                 std::mem::swap(&mut sim.state, &mut old.state);
                 std::mem::swap(&mut sim.tau_actuator, &mut old.tau_actuator);
-                // The same actuators go on with their lag, latency and servo states.
-                if let (Some(new), Some(prev)) =
-                    (&sim.workspace.actuators, &old.workspace.actuators)
-                    && new.specs() == prev.specs()
-                {
-                    std::mem::swap(&mut sim.workspace.actuators, &mut old.workspace.actuators);
-                }
-                // Same bodies (a payload or an inertia edit): the controller,
-                // metrics and contact points (by body) stay valid and go on.
-                if old.model.nbodies == sim.model.nbodies && old.model.parent == sim.model.parent {
-                    std::mem::swap(&mut sim.run, &mut old.run);
-                    std::mem::swap(&mut sim.contact, &mut old.contact);
-                    std::mem::swap(&mut sim.sensing, &mut old.sensing);
-                }
-            } else if carry_over_loads(old, &mut sim) {
+                old.model.nbodies == sim.model.nbodies && old.model.parent == sim.model.parent
+            } else {
+                carry_over_loads(old, &mut sim)
+            };
+            if goes_on {
                 std::mem::swap(&mut sim.run, &mut old.run);
                 std::mem::swap(&mut sim.contact, &mut old.contact);
+                std::mem::swap(&mut sim.sensing, &mut old.sensing);
+            }
+            // The same actuators on the same joint state go on with their
+            // lag, latency and servo states.
+            if let (Some(new), Some(prev)) = (&sim.workspace.actuators, &old.workspace.actuators)
+                && new.specs() == prev.specs()
+                && (same_size || goes_on)
+            {
+                std::mem::swap(&mut sim.workspace.actuators, &mut old.workspace.actuators);
             }
             sim.last_worker = old.last_worker;
             *old = sim;
