@@ -23,7 +23,7 @@
 //!    reference's joint accelerations, base held still).
 //!
 //! quad16's legs are 18 of its 28 kg, and three feedback paths through them
-//! made it fall (each measured with `examples/trot_dbg.rs`): swing PD without
+//! made it fall (each measured with `examples/walk_probe.rs` and its predecessor): swing PD without
 //! feed-forward (diverged at ≥ 8 Hz even in place); swing targets in the
 //! *measured* base frame (body roll/pitch moved the heavy swing legs, whose
 //! reaction rolled the body further: in-place tilt 0.26 → 0.06 rad with the

@@ -1,0 +1,228 @@
+//! A probe of the walking controller: quad16 (or `ROBOT`) on flat concrete
+//! under `WalkerParams::default_for`, with overrides from the environment,
+//! printing a timeline and the run's figures. For tuning and diagnosis only.
+//!
+//! `cargo run --release -p quadsim-engine --example walk_probe -- [v_mps] [seconds]`
+//! Overrides: ELIM (effort limit, N·m), LIFT (m), HT (height target, m),
+//! KG (Raibert gain, s), MSX (max step x, m), VF (velocity filter, s),
+//! CA (command accel, m/s²), HR (max horizontal force ratio), SNC (stance
+//! needs contact), KGU (knee guard, rad), BW (swing bandwidth, Hz), KX/KXD
+//! (scale of the x stiffness/damping), KR/KRD (rotational), EVERY (steps per
+//! tick), PRINT (timeline interval, s; 0: none).
+
+use glam::DVec3;
+use quadsim_engine::contact::{
+    ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
+};
+use quadsim_engine::control::joint_pd::bandwidth_gains;
+use quadsim_engine::control::walker::{Walker, WalkerInput, WalkerParams};
+use quadsim_engine::gait::scheduler::LegPhase;
+use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
+use quadsim_engine::kinematics::forward_kinematics;
+use quadsim_engine::model::{BaseKind, Model};
+use quadsim_engine::spatial::rpy_from_rot;
+use quadsim_engine::terrain::TerrainUnion;
+use quadsim_engine::{Data, robots};
+
+fn env(k: &str) -> Option<f64> {
+    std::env::var(k).ok().and_then(|x| x.parse().ok())
+}
+
+fn main() {
+    let args: Vec<f64> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse().unwrap())
+        .collect();
+    let vx = args.first().copied().unwrap_or(1.5);
+    let dur = args.get(1).copied().unwrap_or(10.0);
+    let robot = std::env::var("ROBOT").unwrap_or_else(|_| "quad16".into());
+    let desc = robots::builtin(&robot).unwrap();
+    let mut model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+    if let Some(l) = env("ELIM") {
+        for e in model.effort_limit[6..].iter_mut() {
+            *e = l;
+        }
+    }
+    let mut data = Data::new(&model);
+    let q0 = robots::nominal_q(&robot).unwrap();
+    let mut p = WalkerParams::default_for(&desc, &model);
+    p.command.forward_mps = vx;
+    if let Some(x) = env("LIFT") {
+        p.lift_height_m = x;
+    }
+    if let Some(x) = env("HT") {
+        p.vmc.base_height_m = x;
+    }
+    if let Some(x) = env("KG") {
+        p.placement.gain_s = x;
+    }
+    if let Some(x) = env("MSX") {
+        p.placement.max_step_x_m = x;
+    }
+    if let Some(x) = env("VF") {
+        p.velocity_filter_s = x;
+    }
+    if let Some(x) = env("CA") {
+        p.command_accel_mps2 = x;
+    }
+    if let Some(x) = env("HR") {
+        p.max_horizontal_force_ratio = x;
+    }
+    if std::env::var("SNC").is_ok() {
+        p.stance_needs_contact = true;
+    }
+    if let Some(x) = env("KGU") {
+        p.knee_guard_rad = x;
+    }
+    if let Some(bw) = env("BW") {
+        let (kp, kd) = bandwidth_gains(&model, &mut data, &q0, bw, 1.0);
+        p.swing_kp_nm_per_rad = kp;
+        p.swing_kd_nms_per_rad = kd;
+    }
+    if let Some(x) = env("KX") {
+        p.vmc.gains.stiffness_npm *= x;
+    }
+    if let Some(x) = env("KXD") {
+        p.vmc.gains.damping_nspm *= x;
+    }
+    if let Some(x) = env("KR") {
+        p.vmc.gains.stiffness_nm_per_rad *= x;
+    }
+    if let Some(x) = env("KRD") {
+        p.vmc.gains.damping_nms_per_rad *= x;
+    }
+    let mut walker = Walker::new(&desc, &model, p).unwrap();
+    let terrain = TerrainUnion::flat(0.0, GroundMaterial::preset("concrete").unwrap());
+    let points = ContactPoint::feet(&model, &desc);
+    let mut states = vec![ContactState::default(); points.len()];
+    let mut st = State {
+        q: q0,
+        v: vec![0.0; model.nv],
+    };
+    let mut ws = StepWorkspace::new(&model);
+    let mut tau = vec![0.0; model.nv];
+    let mut tj = vec![0.0; model.nv - 6];
+    let dt = 0.0005;
+    let every = env("EVERY").map_or(4, |e| e as usize);
+    let print_s = env("PRINT").unwrap_or(0.1);
+    let print_every = ((print_s / dt).round() as usize).max(1);
+    let steps = (dur / dt).round() as usize;
+    let (mut max_tilt, mut x3, mut zmin, mut zmax) = (0.0_f64, None, f64::INFINITY, 0.0_f64);
+    let mut fell = None;
+    let mut x_prev = st.q[0];
+    let mut tau_peak = vec![0.0_f64; model.nv - 6];
+    let mut sat = 0usize;
+    let mut slip = 0usize;
+    let mut nflight = 0usize;
+    forward_kinematics(&model, &mut data, &st.q, &st.v);
+    let c0 = quadsim_engine::com::center_of_mass(&model, &data);
+    println!("base above CoM at start: {:.4} m", st.q[2] - c0.z);
+    for k in 0..steps {
+        forward_kinematics(&model, &mut data, &st.q, &st.v);
+        update_after_step(&points, &data, &terrain, &mut states);
+        if k % every == 0 {
+            let contacts: Vec<bool> = states.iter().map(|s| s.in_contact).collect();
+            let normals: Vec<DVec3> = states.iter().map(|s| s.normal).collect();
+            walker.tick(
+                &model,
+                &mut data,
+                &st.q,
+                &st.v,
+                &WalkerInput {
+                    dt_s: every as f64 * dt,
+                    terrain: &terrain,
+                    contacts: &contacts,
+                    normals: &normals,
+                },
+                &mut tj,
+            );
+            tau[6..].copy_from_slice(&tj);
+            for (j, t) in tj.iter().enumerate() {
+                tau_peak[j] = tau_peak[j].max(t.abs());
+                if t.abs() >= model.effort_limit[6 + j] - 1e-9 {
+                    sat += 1;
+                }
+            }
+            if !contacts.iter().any(|&c| c) {
+                nflight += 1;
+            }
+        }
+        let mut f = ContactForces {
+            terrain: &terrain,
+            points: &points,
+            states: &states,
+        };
+        step(
+            &model,
+            &mut data,
+            &mut ws,
+            &mut st,
+            &tau,
+            dt,
+            Integrator::SemiImplicitEuler,
+            &mut f,
+        );
+        for (i, s) in states.iter().enumerate() {
+            if s.in_contact && s.slipping {
+                let l = walker.scheduler().leg(i);
+                if l.phase == LegPhase::Stance && l.load > 0.99 {
+                    slip += 1;
+                }
+            }
+        }
+        let rpy = rpy_from_rot(data.pose[0].rot);
+        let t = (k + 1) as f64 * dt;
+        max_tilt = max_tilt.max(rpy.x.abs()).max(rpy.y.abs());
+        if k + 1 == (3.0 / dt) as usize {
+            x3 = Some(st.q[0]);
+        }
+        if t >= 3.0 {
+            zmin = zmin.min(st.q[2]);
+            zmax = zmax.max(st.q[2]);
+        }
+        if fell.is_none() && (st.q[2] < 0.3 || rpy.x.abs().max(rpy.y.abs()) > 1.0) {
+            fell = Some(t);
+        }
+        if print_s > 0.0 && (k + 1) % print_every == 0 {
+            let ph: String = (0..4)
+                .map(|i| {
+                    let leg = walker.scheduler().leg(i);
+                    match (leg.phase, states[i].in_contact) {
+                        (LegPhase::Swing, false) => '-',
+                        (LegPhase::Swing, true) => 's',
+                        (_, true) => 'X',
+                        (_, false) => 'o',
+                    }
+                })
+                .collect();
+            let w = walker.wrench();
+            println!(
+                "t {t:5.2} x {:6.3} vx {:5.2} cmd {:4.2} z {:.3} r {:+.3} p {:+.3} y {:+.3} {ph} Fx {:6.0} Fz {:5.0} My {:+5.0}",
+                st.q[0],
+                (st.q[0] - x_prev) / print_s,
+                walker.active_command().forward_mps,
+                st.q[2],
+                rpy.x,
+                rpy.y,
+                rpy.z,
+                w.lin.x,
+                w.lin.z,
+                w.ang.y
+            );
+            x_prev = st.q[0];
+        }
+        if !st.q[2].is_finite() || st.q[2] < 0.1 {
+            break;
+        }
+    }
+    let mean = x3.map_or(f64::NAN, |x| (st.q[0] - x) / (dur - 3.0));
+    println!(
+        "RESULT v {vx} fell {:?} mean[3,{dur}] {mean:.3} tilt {max_tilt:.3} p2p {:.4} sat_ticks {sat} loaded_slip_steps {slip} flight_ticks {nflight}",
+        fell,
+        zmax - zmin
+    );
+    println!(
+        "peak |tau| per joint (N·m): {:?}",
+        tau_peak.iter().map(|t| t.round()).collect::<Vec<_>>()
+    );
+}
