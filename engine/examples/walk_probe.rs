@@ -7,7 +7,8 @@
 //! KG (Raibert gain, s), MSX (max step x, m), VF (velocity filter, s),
 //! CA (command accel, m/s²), HR (max horizontal force ratio), SNC (stance
 //! needs contact), KGU (knee guard, rad), BW (swing bandwidth, Hz), KX/KXD
-//! (scale of the x stiffness/damping), KR/KRD (rotational), EVERY (steps per
+//! (scale of the x stiffness/damping), KR/KRD (rotational), PERIOD and FOUR (a trot's
+//! period and four-leg support, s), EVERY (steps per
 //! tick), PRINT (timeline interval, s; 0: none).
 
 use glam::DVec3;
@@ -47,6 +48,9 @@ fn main() {
     let q0 = robots::nominal_q(&robot).unwrap();
     let mut p = WalkerParams::default_for(&desc, &model);
     p.command.forward_mps = vx;
+    if let (Some(per), Some(four)) = (env("PERIOD"), env("FOUR")) {
+        p.gait = quadsim_engine::gait::Gait::trot_from_supports(per, four, per / 2.0 - four).unwrap();
+    }
     if let Some(x) = env("LIFT") {
         p.lift_height_m = x;
     }
