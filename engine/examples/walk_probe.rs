@@ -214,6 +214,23 @@ fn main() {
                 w.ang.y
             );
             x_prev = st.q[0];
+            if std::env::var("LEGS").is_ok() {
+                // per leg: normal force (N), hip-pitch and knee torque (N·m), knee angle (rad), load
+                let nj = 4; // joints per leg (quad16)
+                let mut line = String::from("      ");
+                for i in 0..4 {
+                    let l = walker.scheduler().leg(i);
+                    line += &format!(
+                        " | Fn {:4.0} th {:+4.0} tk {:+4.0} qk {:+.2} ld {:.1}",
+                        states[i].normal_force_n,
+                        tj[i * nj + 1],
+                        tj[i * nj + 2],
+                        st.q[7 + i * nj + 2],
+                        l.load
+                    );
+                }
+                println!("{line}");
+            }
         }
         if !st.q[2].is_finite() || st.q[2] < 0.1 {
             break;
