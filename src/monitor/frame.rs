@@ -114,51 +114,94 @@ impl Default for RobotFrame {
     }
 }
 
-fn fill(dst: &mut [f64], src: &[f64]) {
-    for (d, s) in dst.iter_mut().zip(src) {
-        *d = *s;
+/// Copies `src` into the head of `dst` and sets `dst[src.len()..old_len]`
+/// to NaN (entries a previous, longer value left behind).
+fn fill(dst: &mut [f64], src: &[f64], old_len: usize) {
+    let n = src.len().min(dst.len());
+    dst[..n].copy_from_slice(&src[..n]);
+    let end = old_len.min(dst.len());
+    if end > n {
+        dst[n..end].fill(f64::NAN);
     }
 }
 
 impl RobotFrame {
     /// The frame of a log sample taken at step `tick`, time `time_s`.
     pub fn from_sample(s: &RobotSample, tick: u64, time_s: f64) -> Self {
-        let mut f = Self {
-            robot_index: s.robot as u32,
-            tick,
-            time_s,
-            n_dof: s.joint_position.len() as u32,
-            n_feet: s.feet.len() as u32,
-            base_position_m: s.base_position_m.to_array(),
-            base_orientation_xyzw: s.base_orientation.to_array(),
-            base_linear_mps: s.base_linear_mps.to_array(),
-            base_angular_radps: s.base_angular_radps.to_array(),
-            rpy_rad: s.rpy_rad.to_array(),
-            com_m: s.com_m.to_array(),
-            com_velocity_mps: s.com_velocity_mps.to_array(),
-            ..Self::default()
+        let mut f = Self::default();
+        f.set_from_sample(s, tick, time_s);
+        f
+    }
+
+    /// Makes `self` equal to [`Self::from_sample`]`(s, tick, time_s)` in
+    /// place, whatever frame it held (of this robot or another): the
+    /// publisher keeps one frame per robot and rewrites only what a sample
+    /// sets, instead of filling a fresh frame with NaN first.
+    pub fn set_from_sample(&mut self, s: &RobotSample, tick: u64, time_s: f64) {
+        // entries past the new counts that the previous frame may have set
+        let old_dof = if self.layout_version == LAYOUT_VERSION {
+            self.dof()
+        } else {
+            MAX_DOF
         };
-        fill(&mut f.joint_q_rad, &s.joint_position);
-        fill(&mut f.joint_qd_radps, &s.joint_velocity);
-        if let Some(t) = &s.joint_position_desired {
-            fill(&mut f.joint_q_desired_rad, t);
-        }
-        if let Some(t) = &s.joint_velocity_desired {
-            fill(&mut f.joint_qd_desired_radps, t);
-        }
-        fill(&mut f.joint_tau_nm, &s.joint_effort);
-        fill(&mut f.joint_tau_desired_nm, &s.joint_effort_command);
+        let old_feet = if self.layout_version == LAYOUT_VERSION {
+            self.feet()
+        } else {
+            MAX_FEET
+        };
+        let (all_dof, all_feet) = (MAX_DOF, MAX_FEET);
+        self.layout_version = LAYOUT_VERSION;
+        self.robot_index = s.robot as u32;
+        self.tick = tick;
+        self.time_s = time_s;
+        self.n_dof = s.joint_position.len() as u32;
+        self.n_feet = s.feet.len() as u32;
+        self.base_position_m = s.base_position_m.to_array();
+        self.base_orientation_xyzw = s.base_orientation.to_array();
+        self.base_linear_mps = s.base_linear_mps.to_array();
+        self.base_angular_radps = s.base_angular_radps.to_array();
+        self.rpy_rad = s.rpy_rad.to_array();
+        self.com_m = s.com_m.to_array();
+        self.com_velocity_mps = s.com_velocity_mps.to_array();
+        fill(&mut self.joint_q_rad, &s.joint_position, old_dof);
+        fill(&mut self.joint_qd_radps, &s.joint_velocity, old_dof);
+        // a missing target is NaN over every joint (the previous frame may
+        // have had one)
+        let targets = s.joint_position_desired.as_deref();
+        fill(
+            &mut self.joint_q_desired_rad,
+            targets.unwrap_or(&[]),
+            all_dof,
+        );
+        let targets = s.joint_velocity_desired.as_deref();
+        fill(
+            &mut self.joint_qd_desired_radps,
+            targets.unwrap_or(&[]),
+            all_dof,
+        );
+        fill(&mut self.joint_tau_nm, &s.joint_effort, old_dof);
+        fill(
+            &mut self.joint_tau_desired_nm,
+            &s.joint_effort_command,
+            old_dof,
+        );
+        self.contact_flags = 0;
+        self.slip_flags = 0;
+        let n_feet = s.feet.len().min(MAX_FEET);
         for (i, foot) in s.feet.iter().take(MAX_FEET).enumerate() {
             if foot.in_contact {
-                f.contact_flags |= 1 << i;
+                self.contact_flags |= 1 << i;
             }
             if foot.slipping {
-                f.slip_flags |= 1 << i;
+                self.slip_flags |= 1 << i;
             }
-            f.foot_force_n[i] = foot.force_n.to_array();
-            f.gait_phase[i] = foot.gait_phase.unwrap_or(f64::NAN);
+            self.foot_force_n[i] = foot.force_n.to_array();
+            self.gait_phase[i] = foot.gait_phase.unwrap_or(f64::NAN);
         }
-        f
+        for i in n_feet..old_feet.max(n_feet).min(all_feet) {
+            self.foot_force_n[i] = [f64::NAN; 3];
+            self.gait_phase[i] = f64::NAN;
+        }
     }
 
     /// The joints carried (`min(n_dof, MAX_DOF)`).
@@ -179,5 +222,76 @@ impl RobotFrame {
     /// Horizontal speed of the base origin (m/s).
     pub fn speed_mps(&self) -> f64 {
         self.base_linear_mps[0].hypot(self.base_linear_mps[1])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DQuat, DVec3};
+    use quadsim_systems::FootLog;
+
+    /// A sample with `dof` joints and `feet` feet, values from `seed`.
+    fn sample(dof: usize, feet: usize, targets: bool, seed: f64) -> RobotSample {
+        let v = |k: f64| (0..dof).map(|i| seed + k + i as f64).collect::<Vec<_>>();
+        RobotSample {
+            robot: 3,
+            q: v(0.0),
+            v: v(1.0),
+            base_position_m: DVec3::splat(seed),
+            base_orientation: DQuat::from_rotation_z(seed),
+            base_linear_mps: DVec3::splat(seed + 1.0),
+            base_angular_radps: DVec3::splat(seed + 2.0),
+            rpy_rad: DVec3::splat(seed + 3.0),
+            com_m: DVec3::splat(seed + 4.0),
+            com_velocity_mps: DVec3::splat(seed + 5.0),
+            com_acceleration_mps2: DVec3::ZERO,
+            joint_position: v(10.0),
+            joint_velocity: v(20.0),
+            joint_effort: v(30.0),
+            joint_effort_command: v(40.0),
+            joint_position_desired: targets.then(|| v(50.0)),
+            joint_velocity_desired: targets.then(|| v(60.0)),
+            feet: (0..feet)
+                .map(|i| FootLog {
+                    in_contact: i % 2 == 0,
+                    slipping: i == 1,
+                    penetration_m: 0.0,
+                    normal_force_n: 0.0,
+                    force_n: DVec3::splat(seed + i as f64),
+                    position_m: DVec3::ZERO,
+                    gait_phase: targets.then_some(0.25 * i as f64),
+                })
+                .collect(),
+            virtual_wrench: None,
+            sensing: None,
+            link_transforms: Vec::new(),
+        }
+    }
+
+    /// Rewriting a frame in place gives the fresh frame bit for bit (NaN
+    /// included), whatever it held before: a longer robot with targets and
+    /// more feet, a shorter one, or the same robot again.
+    #[test]
+    fn rewriting_in_place_equals_a_fresh_frame() {
+        let bits = |f: &RobotFrame| format!("{f:?}");
+        let cases = [
+            (sample(16, 4, true, 1.0), sample(12, 2, false, 2.0)),
+            (sample(12, 2, false, 2.0), sample(16, 4, true, 1.0)),
+            (sample(16, 4, true, 1.0), sample(16, 4, true, 5.0)),
+            (sample(30, 6, true, 1.0), sample(3, 1, false, 7.0)),
+        ];
+        for (before, after) in &cases {
+            let mut f = RobotFrame::from_sample(before, 8, 0.004);
+            f.set_from_sample(after, 12, 0.006);
+            let fresh = RobotFrame::from_sample(after, 12, 0.006);
+            assert_eq!(bits(&f), bits(&fresh));
+        }
+        // and the fresh frame has NaN past the robot's joints and feet
+        let f = RobotFrame::from_sample(&sample(12, 2, false, 2.0), 0, 0.0);
+        assert!(f.joint_q_rad[12..].iter().all(|x| x.is_nan()));
+        assert!(f.joint_q_desired_rad.iter().all(|x| x.is_nan()));
+        assert!(f.foot_force_n[2..].iter().flatten().all(|x| x.is_nan()));
+        assert_eq!(f.joint_q_rad[11], 2.0 + 10.0 + 11.0);
     }
 }

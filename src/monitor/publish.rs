@@ -52,6 +52,9 @@ pub struct FramePublisher {
     /// Model of each robot by instance name (the scenario's `robots[].model`).
     models: Vec<(String, String)>,
     stats: Arc<MonitorStats>,
+    /// The last instant's frames, rewritten in place each publish
+    /// ([`RobotFrame::set_from_sample`]) and copied into the loan in one go.
+    frames_scratch: std::sync::Mutex<Vec<RobotFrame>>,
 }
 
 impl std::fmt::Debug for FramePublisher {
@@ -126,6 +129,7 @@ impl FramePublisher {
             every_steps,
             models,
             stats: Arc::default(),
+            frames_scratch: std::sync::Mutex::new(Vec::with_capacity(n_robots)),
         })
     }
 
@@ -144,7 +148,15 @@ impl FramePublisher {
             self.stats.dropped.fetch_add(1, Ordering::Relaxed);
             return;
         };
-        let sample = sample.write_from_fn(|i| RobotFrame::from_sample(&samples[i], tick, time_s));
+        let mut frames = self
+            .frames_scratch
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        frames.resize(samples.len(), RobotFrame::default());
+        for (f, s) in frames.iter_mut().zip(samples) {
+            f.set_from_sample(s, tick, time_s);
+        }
+        let sample = sample.write_from_slice(&frames);
         match sample.send() {
             Ok(_) => self.stats.published.fetch_add(1, Ordering::Relaxed),
             Err(_) => self.stats.dropped.fetch_add(1, Ordering::Relaxed),
