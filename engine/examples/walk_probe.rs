@@ -49,7 +49,8 @@ fn main() {
     let mut p = WalkerParams::default_for(&desc, &model);
     p.command.forward_mps = vx;
     if let (Some(per), Some(four)) = (env("PERIOD"), env("FOUR")) {
-        p.gait = quadsim_engine::gait::Gait::trot_from_supports(per, four, per / 2.0 - four).unwrap();
+        p.gait =
+            quadsim_engine::gait::Gait::trot_from_supports(per, four, per / 2.0 - four).unwrap();
     }
     if let Some(x) = env("LIFT") {
         p.lift_height_m = x;
