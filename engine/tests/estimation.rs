@@ -9,7 +9,7 @@ use quadsim_engine::contact::{
 use quadsim_engine::control::vmc::VmcCommand;
 use quadsim_engine::control::walker::{Walker, WalkerInput, WalkerParams};
 use quadsim_engine::estimation::{
-    AttitudeFilter, AttitudeParams, BaseEstimator, EstimationErrors, EstimatorInput,
+    AttitudeFilter, AttitudeParams, BaseEstimator, ErrorStat, EstimationErrors, EstimatorInput,
     EstimatorParams,
 };
 use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
@@ -19,6 +19,7 @@ use quadsim_engine::sensors::{
     ContactSensorParams, EncoderParams, ImuParams, SensorConfig, SensorSuite, SensorTruth,
     noise::NoiseParams,
 };
+use quadsim_engine::spatial::rpy_from_rot;
 use quadsim_engine::terrain::TerrainUnion;
 use quadsim_engine::{Data, robots};
 
@@ -131,6 +132,9 @@ struct TrotRun {
     errors: EstimationErrors,
     fell: bool,
     mean_speed_mps: f64,
+    /// Horizontal position error (m) and yaw error (rad) at every update.
+    xy_error: ErrorStat,
+    yaw_error: ErrorStat,
 }
 
 /// quad16 trots at `forward_mps` for `duration_s` on flat concrete
@@ -164,6 +168,8 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
     let dt_s = 0.0005;
     let every = 4;
     let mut errors = EstimationErrors::default();
+    let (mut xy_error, mut yaw_error) = (ErrorStat::default(), ErrorStat::default());
+    let mut est_updated = false;
     let mut fell = false;
     let mut x3 = None;
     let steps = (duration_s / dt_s).round() as usize;
@@ -186,7 +192,11 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
         });
         let enc = sensors.encoders.as_ref().unwrap();
         let contacts = sensors.contacts.as_ref().unwrap().in_contact.clone();
+        if let (true, Some(m)) = (up.mocap, sensors.mocap.as_ref().and_then(|m| m.last)) {
+            assert!(est.fuse_mocap(&terrain, &m), "capture within the history");
+        }
         if up.imu {
+            est_updated = true;
             let s = sensors.imu.as_ref().unwrap().last.unwrap();
             est.update(
                 &model,
@@ -202,6 +212,14 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
                 },
             );
             if t >= 0.5 {
+                let p = est.estimate.position_m;
+                xy_error.record((p.x - st.q[0]).hypot(p.y - st.q[1]));
+                let yaw = |q: DQuat| rpy_from_rot(DMat3::from_quat(q)).z;
+                let dy = yaw(est.estimate.orientation) - yaw(DQuat::from_mat3(&rot));
+                yaw_error.record(
+                    (dy + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                        - std::f64::consts::PI,
+                );
                 errors.record(
                     &est.estimate,
                     DQuat::from_mat3(&rot),
@@ -257,10 +275,13 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
             break;
         }
     }
+    assert!(est_updated);
     TrotRun {
         errors,
         fell,
         mean_speed_mps: x3.map_or(0.0, |x| (st.q[0] - x) / (duration_s - 3.0)),
+        xy_error,
+        yaw_error,
     }
 }
 
@@ -350,4 +371,46 @@ fn walker_trots_on_the_estimate_with_default_noise() {
         "speed {}",
         r.mean_speed_mps
     );
+}
+
+/// Motion capture fused (120 Hz, 10 ms latency, 0.5 mm and 2 mrad noise:
+/// `SensorConfig::default_mocap`) removes the odometry's drift: beside a
+/// 10 s ground-truth trot at 0.5 m/s with quad16's default noisy sensors
+/// but a consumer-grade gyroscope (turn-on bias 0.01 rad/s per axis, about
+/// 0.6°/s, which the accelerometer cannot reveal about the vertical), the
+/// horizontal position error stays within 1 cm RMS and the yaw error within
+/// 5 mrad RMS (bounds fixed before measuring), each at most a fifth of the
+/// same run's error without mocap.
+#[test]
+fn fused_motion_capture_removes_the_drift() {
+    let mut config = SensorConfig::defaults_for("quad16", 500.0);
+    if let Some(imu) = config.imu.as_mut() {
+        imu.gyro.bias_std = 0.01;
+    }
+    let without = trot(&config, 0.5, 10.0, false);
+    config.mocap = Some(SensorConfig::default_mocap());
+    let with = trot(&config, 0.5, 10.0, false);
+    for (what, r) in [("without mocap", &without), ("with mocap", &with)] {
+        println!(
+            "{what}: xy error RMS {:.4} max {:.4} m; yaw error RMS {:.4} max {:.4} rad",
+            r.xy_error.rms(),
+            r.xy_error.max,
+            r.yaw_error.rms(),
+            r.yaw_error.max
+        );
+    }
+    assert!(
+        with.xy_error.rms() <= 0.01,
+        "xy RMS {}",
+        with.xy_error.rms()
+    );
+    assert!(
+        with.yaw_error.rms() <= 0.005,
+        "yaw RMS {}",
+        with.yaw_error.rms()
+    );
+    assert!(with.xy_error.rms() <= 0.2 * without.xy_error.rms());
+    assert!(with.yaw_error.rms() <= 0.2 * without.yaw_error.rms());
+    // and the rest of the estimate stays usable
+    assert_usable(&with);
 }

@@ -190,6 +190,16 @@ impl BaseKf {
         self.p -= k * ph.transpose();
     }
 
+    /// A direct measurement `z` of the base position (m, world), each axis
+    /// with standard deviation `std_m` (motion capture).
+    pub fn update_position(&mut self, z: DVec3, std_m: f64) {
+        let r = std_m * std_m;
+        for k in 0..3 {
+            self.update_scalar(k, None, z[k], r);
+        }
+        self.p = 0.5 * (self.p + self.p.transpose());
+    }
+
     /// The measurement update with each foot's kinematics.
     pub fn update(&mut self, feet: &[FootMeasurement]) {
         let kp = self.params;

@@ -6,9 +6,12 @@
 //!
 //! [`BaseEstimator::update`] runs once per IMU sample. It estimates the
 //! torso's orientation, its velocity and its height above the ground; its
-//! horizontal position is odometry (it drifts). [`BaseEstimator::write_state`]
-//! assembles the generalised `(q, v)` a controller reads. Equations and
-//! tuning: `docs/sensors.md`.
+//! horizontal position is odometry (it drifts), and so is its yaw, unless
+//! motion capture is fused ([`BaseEstimator::fuse_mocap`]: each delayed
+//! pose corrects the estimate by its innovation against the estimate at
+//! the capture time). [`BaseEstimator::write_state`] assembles the
+//! generalised `(q, v)` a controller reads. Equations and tuning:
+//! `docs/sensors.md`.
 
 pub mod attitude;
 pub mod kf;
@@ -19,6 +22,7 @@ use crate::contact::ContactPoint;
 use crate::data::Data;
 use crate::kinematics::{base_quat, forward_kinematics};
 use crate::model::Model;
+use crate::sensors::MocapSample;
 use crate::terrain::{Terrain, TerrainUnion};
 
 pub use attitude::{AttitudeFilter, AttitudeParams};
@@ -31,7 +35,35 @@ pub struct EstimatorParams {
     pub attitude: AttitudeParams,
     /// Kalman filter noise figures.
     pub kf: KfParams,
+    /// Motion-capture fusion (used only when mocap samples are fused).
+    pub mocap: MocapFusionParams,
 }
+
+/// How [`BaseEstimator::fuse_mocap`] weighs motion capture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MocapFusionParams {
+    /// Position measurement noise per axis (m), the Kalman update's.
+    pub position_std_m: f64,
+    /// Time constant (s) with which the orientation is pulled toward the
+    /// captured one (a complementary filter: the IMU keeps the fast motion,
+    /// mocap removes the drift, in yaw above all).
+    pub orientation_time_constant_s: f64,
+}
+
+impl Default for MocapFusionParams {
+    /// 2 mm (a few times a typical optical system's noise, for its
+    /// jitter and marker placement) and 0.1 s.
+    fn default() -> Self {
+        MocapFusionParams {
+            position_std_m: 0.002,
+            orientation_time_constant_s: 0.1,
+        }
+    }
+}
+
+/// Estimates kept for delayed measurements: (time, position, orientation).
+/// 256 updates: 0.5 s at a 500 Hz IMU.
+const HISTORY: usize = 256;
 
 /// The estimated base state.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -78,6 +110,8 @@ pub struct BaseEstimator {
     pub attitude: AttitudeFilter,
     /// Position/velocity filter.
     pub kf: BaseKf,
+    /// Tuning.
+    pub params: EstimatorParams,
     /// The latest estimate.
     pub estimate: BaseEstimate,
     feet: Vec<ContactPoint>,
@@ -87,6 +121,13 @@ pub struct BaseEstimator {
     v_fk: Vec<f64>,
     meas: [FootMeasurement; KF_FEET],
     stance: [bool; KF_FEET],
+    /// The last [`HISTORY`] estimates, oldest first once full (a ring at
+    /// `history_head`): delayed measurements are compared with the estimate
+    /// of their capture time.
+    history: Vec<(f64, DVec3, DQuat)>,
+    history_head: usize,
+    /// Time of the last fused mocap capture (s).
+    last_mocap_t_s: Option<f64>,
 }
 
 impl BaseEstimator {
@@ -134,6 +175,10 @@ impl BaseEstimator {
             v_fk: vec![0.0; model.nv],
             meas: [FootMeasurement::default(); KF_FEET],
             stance: [false; KF_FEET],
+            history: Vec::with_capacity(HISTORY),
+            history_head: 0,
+            last_mocap_t_s: None,
+            params,
         }
     }
 
@@ -192,6 +237,79 @@ impl BaseEstimator {
             omega_body_radps: omega,
             height_m: p.z - ground,
         };
+        self.remember();
+    }
+
+    /// Records the latest estimate in the history ring.
+    fn remember(&mut self) {
+        let e = (
+            self.estimate.t_s,
+            self.estimate.position_m,
+            self.estimate.orientation,
+        );
+        if self.history.len() < HISTORY {
+            self.history.push(e);
+        } else {
+            self.history[self.history_head] = e;
+            self.history_head = (self.history_head + 1) % HISTORY;
+        }
+    }
+
+    /// Fuses one motion-capture sample (captured at `s.captured_t_s`,
+    /// delivered now): the innovation is taken against the estimate of the
+    /// capture time from the history, then applied to the current estimate
+    /// (position: a Kalman update of `p̂_now` with `z = p̂_now + (p_mocap −
+    /// p̂(t_c))`; orientation: a fraction `1 − exp(−Δt/τ)` of the rotation
+    /// from `R̂(t_c)` to the captured one, Δt the time since the previous
+    /// capture); the estimates kept since the capture are shifted by the
+    /// same correction, so the next sample's innovation does not count it
+    /// twice. A capture newer than the latest estimate is compared with the
+    /// latest. Returns false (and changes nothing) when the capture is older
+    /// than the history.
+    pub fn fuse_mocap(&mut self, terrain: &TerrainUnion, s: &MocapSample) -> bool {
+        let n = self.history.len();
+        let at = |k: usize| (self.history_head + k) % n.max(1);
+        // the newest estimate at or before the capture
+        let Some(k_c) = (0..n)
+            .rev()
+            .find(|&k| self.history[at(k)].0 <= s.captured_t_s + 1e-9)
+        else {
+            return false;
+        };
+        let (_, p_c, q_c) = self.history[at(k_c)];
+        let mp = self.params.mocap;
+        // position
+        let p_before = self.kf.position_m();
+        self.kf
+            .update_position(p_before + (s.position_m - p_c), mp.position_std_m);
+        let dp = self.kf.position_m() - p_before;
+        // orientation
+        let dt = self
+            .last_mocap_t_s
+            .map_or(0.0, |t| (s.captured_t_s - t).max(0.0));
+        self.last_mocap_t_s = Some(s.captured_t_s);
+        let tau = mp.orientation_time_constant_s;
+        let alpha = if tau > 0.0 {
+            1.0 - (-dt / tau).exp()
+        } else {
+            1.0
+        };
+        let err = (s.orientation * q_c.inverse()).normalize();
+        let dq = DQuat::IDENTITY.slerp(err, alpha).normalize();
+        self.attitude.orientation = (dq * self.attitude.orientation).normalize();
+        // the estimates since the capture carry the same correction
+        for k in k_c..n {
+            let i = at(k);
+            let (t, p, q) = self.history[i];
+            self.history[i] = (t, p + dp, (dq * q).normalize());
+        }
+        let p = self.kf.position_m();
+        let ground = terrain.height(p.x, p.y).unwrap_or(0.0);
+        self.estimate.orientation = self.attitude.orientation;
+        self.estimate.position_m = p;
+        self.estimate.velocity_world_mps = self.kf.velocity_mps();
+        self.estimate.height_m = p.z - ground;
+        true
     }
 
     /// The generalised state a controller reads: base from the estimate,
