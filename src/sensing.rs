@@ -266,9 +266,19 @@ fn estimator_params(
         ("foot_velocity_std_mps", e.foot_velocity_std_mps),
         ("foot_height_std_m", e.foot_height_std_m),
         ("velocity_gate_chi2", e.velocity_gate_chi2),
+        (
+            "mocap_orientation_time_constant_s",
+            e.mocap_orientation_time_constant_s,
+        ),
     ] {
         check(loc, &format!("{ep}.{k}"), v, false)?;
     }
+    check(
+        loc,
+        &format!("{ep}.mocap_position_std_m"),
+        e.mocap_position_std_m,
+        true,
+    )?;
     let mut params = EstimatorParams::default();
     let a = &mut params.attitude;
     a.kp_radps = e.attitude_kp_radps.unwrap_or(a.kp_radps);
@@ -280,6 +290,12 @@ fn estimator_params(
     k.foot_velocity_std_mps = e.foot_velocity_std_mps.unwrap_or(k.foot_velocity_std_mps);
     k.foot_height_std_m = e.foot_height_std_m.unwrap_or(k.foot_height_std_m);
     k.velocity_gate_chi2 = e.velocity_gate_chi2.unwrap_or(k.velocity_gate_chi2);
+    let m = &mut params.mocap;
+    m.enabled = e.fuse_mocap.unwrap_or(m.enabled);
+    m.position_std_m = e.mocap_position_std_m.unwrap_or(m.position_std_m);
+    m.orientation_time_constant_s = e
+        .mocap_orientation_time_constant_s
+        .unwrap_or(m.orientation_time_constant_s);
     Ok(params)
 }
 

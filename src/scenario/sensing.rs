@@ -136,4 +136,10 @@ pub struct EstimatorSpec {
     pub foot_height_std_m: Option<f64>,
     /// Kalman filter: χ² gate on a stance foot's velocity (≤ 0: none).
     pub velocity_gate_chi2: Option<f64>,
+    /// Whether motion capture (when on) is fused into the estimate. Default true.
+    pub fuse_mocap: Option<bool>,
+    /// Mocap position noise the fusion assumes, per axis (m). Default 0.002.
+    pub mocap_position_std_m: Option<f64>,
+    /// Time constant of the orientation's pull toward mocap (s). Default 0.1.
+    pub mocap_orientation_time_constant_s: Option<f64>,
 }

@@ -82,6 +82,16 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
             }
         }
     }
+    // a delivered motion-capture pose corrects the estimate (delayed fusion)
+    if s.updates.mocap
+        && let (Some(est), Some(m)) = (
+            s.estimator.as_mut(),
+            s.suite.mocap.as_ref().and_then(|m| m.last),
+        )
+        && est.params.mocap.enabled
+    {
+        est.fuse_mocap(&contact.terrain, &m);
+    }
     if let (Some(est), Some(imu)) = (s.estimator.as_mut(), s.suite.imu.as_ref())
         && s.updates.imu
         && let Some(sample) = imu.last

@@ -42,6 +42,9 @@ pub struct EstimatorParams {
 /// How [`BaseEstimator::fuse_mocap`] weighs motion capture.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MocapFusionParams {
+    /// Whether delivered mocap samples are fused (the simulation's sensing
+    /// stage asks; a test may fuse by hand).
+    pub enabled: bool,
     /// Position measurement noise per axis (m), the Kalman update's.
     pub position_std_m: f64,
     /// Time constant (s) with which the orientation is pulled toward the
@@ -51,10 +54,11 @@ pub struct MocapFusionParams {
 }
 
 impl Default for MocapFusionParams {
-    /// 2 mm (a few times a typical optical system's noise, for its
+    /// On; 2 mm (a few times a typical optical system's noise, for its
     /// jitter and marker placement) and 0.1 s.
     fn default() -> Self {
         MocapFusionParams {
+            enabled: true,
             position_std_m: 0.002,
             orientation_time_constant_s: 0.1,
         }
