@@ -12,7 +12,7 @@
 //! a `google.protobuf.Timestamp timestamp = 1`, `x/y/z` vectors, SI units.
 
 use prost::Message as _;
-use prost_reflect::{DescriptorPool, DynamicMessage, Kind, MessageDescriptor, ReflectMessage};
+use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage};
 use prost_types::field_descriptor_proto::{Label, Type};
 use prost_types::{
     DescriptorProto, FieldDescriptorProto, FileDescriptorProto, FileDescriptorSet,
@@ -437,7 +437,7 @@ fn message_json(m: &DynamicMessage) -> Value {
             let v = m.get_field(&f);
             match v.as_list() {
                 Some([]) => Value::Null,
-                _ => value_json(&v, &f.kind()),
+                _ => value_json(&v),
             }
         };
         out.insert(f.name().to_string(), v);
@@ -445,7 +445,7 @@ fn message_json(m: &DynamicMessage) -> Value {
     Value::Object(out)
 }
 
-fn value_json(v: &prost_reflect::Value, kind: &Kind) -> Value {
+fn value_json(v: &prost_reflect::Value) -> Value {
     use prost_reflect::Value as P;
     let num = |x: f64| serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number);
     match v {
@@ -460,10 +460,10 @@ fn value_json(v: &prost_reflect::Value, kind: &Kind) -> Value {
         P::Bytes(b) => Value::Array(b.iter().map(|&x| Value::from(x)).collect()),
         P::EnumNumber(n) => Value::from(*n),
         P::Message(m) => message_json(m),
-        P::List(xs) => Value::Array(xs.iter().map(|x| value_json(x, kind)).collect()),
+        P::List(xs) => Value::Array(xs.iter().map(value_json).collect()),
         P::Map(m) => Value::Object(
             m.iter()
-                .map(|(k, v)| (format!("{k:?}"), value_json(v, kind)))
+                .map(|(k, v)| (format!("{k:?}"), value_json(v)))
                 .collect(),
         ),
     }

@@ -16,7 +16,7 @@ use serde_json::Value;
 use super::writer::LogError;
 
 /// One message of the log.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct LogMessage {
     /// Its channel's topic.
     pub topic: String,
@@ -29,6 +29,19 @@ pub struct LogMessage {
     /// The message's protobuf descriptor (from the schema in the log) when
     /// its channel is protobuf; `None` for JSON.
     pub descriptor: Option<MessageDescriptor>,
+}
+
+/// Equal messages: same topic, schema, time and bytes (descriptors by name:
+/// two reads of one log hold equal descriptors in distinct pools).
+impl PartialEq for LogMessage {
+    fn eq(&self, other: &Self) -> bool {
+        self.topic == other.topic
+            && self.schema == other.schema
+            && self.log_time_ns == other.log_time_ns
+            && self.data == other.data
+            && self.descriptor.as_ref().map(MessageDescriptor::full_name)
+                == other.descriptor.as_ref().map(MessageDescriptor::full_name)
+    }
 }
 
 impl LogMessage {
