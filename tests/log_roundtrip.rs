@@ -152,14 +152,56 @@ fn channels_counts_schemas_and_values_match_the_simulation() {
     assert_eq!(c.topic("/terrain").count(), 1);
     assert_eq!(c.topic("/rex/metrics").count(), 1);
     assert_eq!(c.topic("/quiet/metrics").count(), 1);
-    // every message conforms to its schema, and the schema stored is ours
+    // the schemas stored are ours (protobuf descriptor sets for the per-step
+    // channels, JSON Schemas for the rest), and every message, decoded by the
+    // schema stored in the log, has the shape its JSON Schema documents
     for schema in Schema::ALL {
-        let stored: Value = serde_json::from_str(&c.schemas[schema.name()]).unwrap();
-        assert_eq!(stored, schema.json(), "{}", schema.name());
+        let stored = &c.schemas[schema.name()];
+        assert_eq!(
+            stored.encoding,
+            schema.schema_encoding(),
+            "{}",
+            schema.name()
+        );
+        assert_eq!(stored.data, schema.data(), "{}", schema.name());
     }
     for m in &c.messages {
-        let schema: Value = serde_json::from_str(&c.schemas[&m.schema]).unwrap();
-        conforms(&m.json().unwrap(), &schema, &m.topic).unwrap();
+        let schema = Schema::ALL.iter().find(|s| s.name() == m.schema).unwrap();
+        assert_eq!(m.descriptor.is_some(), schema.is_protobuf(), "{}", m.topic);
+        conforms(&m.json().unwrap(), &schema.json(), &m.topic).unwrap();
+    }
+    // Foxglove's own types (the `foxglove` crate's prost structs, not our
+    // decoder) read the foxglove.* channels to the same values
+    {
+        use prost::Message as _;
+        let m = c.topic("/rex/base_pose").last().unwrap();
+        let p = foxglove::schemas::PoseInFrame::decode(&m.data[..]).unwrap();
+        let j = m.json().unwrap();
+        let pos = p.pose.unwrap().position.unwrap();
+        assert_eq!([pos.x, pos.y, pos.z], v3(&j["pose"]["position"]));
+        assert_eq!(p.frame_id, "world");
+        let t = p.timestamp.unwrap();
+        assert_eq!(
+            u64::from(t.sec()) * 1_000_000_000 + u64::from(t.nsec()),
+            m.log_time_ns
+        );
+        let m = c.topic("/tf").last().unwrap();
+        let tf = foxglove::schemas::FrameTransforms::decode(&m.data[..]).unwrap();
+        let j = m.json().unwrap();
+        assert_eq!(
+            tf.transforms.len(),
+            j["transforms"].as_array().unwrap().len()
+        );
+        for (a, b) in tf
+            .transforms
+            .iter()
+            .zip(j["transforms"].as_array().unwrap())
+        {
+            assert_eq!(a.child_frame_id, b["child_frame_id"].as_str().unwrap());
+            assert_eq!(a.parent_frame_id, b["parent_frame_id"].as_str().unwrap());
+            let r = a.rotation.unwrap();
+            assert_eq!(r.w, b["rotation"]["w"].as_f64().unwrap());
+        }
     }
 
     // the first sample is the start state, the last the final state, exactly
@@ -209,7 +251,7 @@ fn channels_counts_schemas_and_values_match_the_simulation() {
     assert!(feet["feet"][0]["gait_phase"].is_null());
     assert!(last(&c, "/rex/virtual_wrench")["force"].is_null());
     // /tf holds every link of the logged robot only, as a tree whose chains
-    // compose to the links' world poses (single precision)
+    // compose to the links' world poses (double precision)
     let tf = last(&c, "/tf");
     let tfs = tf["transforms"].as_array().unwrap();
     assert_eq!(tfs.len(), sim.model.frames.len());
@@ -239,13 +281,13 @@ fn channels_counts_schemas_and_values_match_the_simulation() {
         }
         let want = quadsim_engine::kinematics::frame_pose(&sim.model, &data, f);
         assert!(
-            (p - want.trans).length() < 1e-5,
+            (p - want.trans).length() < 1e-12,
             "{}: {p} vs {}",
             frame.name,
             want.trans
         );
         let err = (glam::DMat3::from_quat(r) - want.rot).abs().to_cols_array();
-        assert!(err.iter().all(|e| *e < 1e-5), "{}", frame.name);
+        assert!(err.iter().all(|e| *e < 1e-12), "{}", frame.name);
     }
 
     // metadata

@@ -103,8 +103,9 @@ fn robot(name: &str, y: f64, extra: &str) -> String {
     )
 }
 
-/// Per robot (sorted by name): its summary object and its log messages (topic, bytes).
-type Logged = Vec<(String, Value, Vec<(String, Vec<u8>)>)>;
+/// Per robot (sorted by name): its summary object and its log messages
+/// (topic, bytes, decoded).
+type Logged = Vec<(String, Value, Vec<(String, Vec<u8>, Value)>)>;
 
 /// Log payloads and summaries per robot.
 fn logged(src: &str, threads: usize, seed: Option<u64>, tag: &str) -> Logged {
@@ -134,7 +135,7 @@ fn logged(src: &str, threads: usize, seed: Option<u64>, tag: &str) -> Logged {
                 .messages
                 .iter()
                 .filter(|m| m.topic.starts_with(&prefix))
-                .map(|m| (m.topic.clone(), m.data.clone()))
+                .map(|m| (m.topic.clone(), m.data.clone(), m.json().unwrap()))
                 .collect();
             (
                 name.clone(),
@@ -247,8 +248,8 @@ fn sensors_are_logged_beside_the_true_state() {
     let msgs = |robot: &str, topic: &str| -> Vec<Value> {
         let (_, _, m) = logs.iter().find(|(n, _, _)| n == robot).unwrap();
         m.iter()
-            .filter(|(t, _)| t == &format!("/{robot}/{topic}"))
-            .map(|(_, d)| serde_json::from_slice(d).unwrap())
+            .filter(|(t, _, _)| t == &format!("/{robot}/{topic}"))
+            .map(|(_, _, j)| j.clone())
             .collect()
     };
     let sensed = msgs("a", "sensors");

@@ -69,7 +69,7 @@ pub fn export_csv(contents: &LogContents, dir: &Path) -> Result<Vec<PathBuf>, Cl
             }
             let v = m.json().map_err(|e| {
                 bad(format!(
-                    "{topic}: message at t = {} s is not JSON: {e}",
+                    "{topic}: message at t = {} s cannot be decoded: {e}",
                     m.t_s()
                 ))
             })?;

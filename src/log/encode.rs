@@ -1,11 +1,14 @@
-//! JSON encoding of log records into channel messages (see [`super::schema`]
-//! for the shapes). Non-finite numbers are written as `null` (JSON has none).
+//! Encoding of log records into channel messages: the per-step channels in
+//! protobuf ([`super::proto`]), the scene in JSON (see [`super::schema`] for
+//! the shapes; JSON has no non-finite numbers: they are written as `null`).
 
 use glam::{DQuat, DVec3};
 use quadsim_engine::description::{Geometry, Shape};
 use quadsim_engine::spatial::Transform;
 use quadsim_systems::{RobotInfo, RobotSample};
 use serde::Serialize;
+
+use super::proto::Pb;
 
 /// `{sec, nsec}` from simulation nanoseconds.
 #[derive(Serialize, Clone, Copy, Debug)]
@@ -80,137 +83,57 @@ impl From<&Transform> for Pose {
     }
 }
 
-/// A minimal JSON writer for the per-step messages, the hot path of the log:
-/// keys are literals, names are escaped once per robot, numbers are printed
-/// with `zmij` (shortest text that reads back to the same number, as
-/// `serde_json` prints them); non-finite numbers become `null`.
-struct Json<'a>(&'a mut Vec<u8>);
-
-impl Json<'_> {
-    #[inline]
-    fn raw(&mut self, s: &str) {
-        self.0.extend_from_slice(s.as_bytes());
-    }
-
-    #[inline]
-    fn num(&mut self, x: f64) {
-        if x.is_finite() {
-            let mut b = zmij::Buffer::new();
-            self.raw(b.format_finite(x));
-        } else {
-            self.raw("null");
-        }
-    }
-
-    #[inline]
-    fn num32(&mut self, x: f32) {
-        if x.is_finite() {
-            let mut b = zmij::Buffer::new();
-            self.raw(b.format_finite(x));
-        } else {
-            self.raw("null");
-        }
-    }
-
-    fn int(&mut self, x: u64) {
-        use std::io::Write as _;
-        let _ = write!(self.0, "{x}");
-    }
-
-    fn time(&mut self, t: Time) {
-        self.raw("{\"sec\":");
-        self.int(t.sec);
-        self.raw(",\"nsec\":");
-        self.int(u64::from(t.nsec));
-        self.raw("}");
-    }
-
-    fn v3(&mut self, v: DVec3) {
-        self.raw("{\"x\":");
-        self.num(v.x);
-        self.raw(",\"y\":");
-        self.num(v.y);
-        self.raw(",\"z\":");
-        self.num(v.z);
-        self.raw("}");
-    }
-
-    fn quat(&mut self, q: DQuat) {
-        self.raw("{\"x\":");
-        self.num(q.x);
-        self.raw(",\"y\":");
-        self.num(q.y);
-        self.raw(",\"z\":");
-        self.num(q.z);
-        self.raw(",\"w\":");
-        self.num(q.w);
-        self.raw("}");
-    }
-
-    fn nums(&mut self, xs: Option<&[f64]>) {
-        let Some(xs) = xs else {
-            self.raw("null");
-            return;
-        };
-        self.raw("[");
-        for (i, &x) in xs.iter().enumerate() {
-            if i > 0 {
-                self.raw(",");
-            }
-            self.num(x);
-        }
-        self.raw("]");
-    }
-
-    fn bool(&mut self, b: bool) {
-        self.raw(if b { "true" } else { "false" });
-    }
-
-    /// `{"timestamp":…` (an object's first key).
-    fn start(&mut self, t_ns: u64) {
-        self.raw("{\"timestamp\":");
-        self.time(Time::from_ns(t_ns));
-    }
-}
-
-/// A string as a JSON string literal (quotes included).
-fn quoted(s: &str) -> String {
-    serde_json::to_string(s).expect("strings serialise")
-}
-
-/// Names a robot's messages need, escaped as JSON once per [`RobotInfo`].
+/// Names a robot's messages need, encoded as protobuf fields once per
+/// [`RobotInfo`] (the hot path then copies bytes).
 #[derive(Debug, Clone)]
 pub struct RobotNames {
     /// Robot name.
     pub robot: String,
-    /// The actuated joints' names as a JSON array (velocity order).
-    joints: String,
-    /// Each foot's name as a JSON string (model order).
-    feet: Vec<String>,
-    /// `"<robot>/<link>"` of every model frame as a JSON string.
-    frames: Vec<String>,
-    /// The parent frame of every model frame as a JSON string (`"world"` for the base).
-    parents: Vec<String>,
+    /// The actuated joints' names as `JointState.name` fields (velocity order).
+    joints: Vec<u8>,
+    /// Each foot's name as a `FootContact.name` field (model order).
+    feet: Vec<Vec<u8>>,
+    /// Per model frame: its `parent_frame_id` and `child_frame_id` fields
+    /// (`"<robot>/<link>"`; the base's parent is `"world"`).
+    frames: Vec<Vec<u8>>,
+}
+
+/// `s` as protobuf string field `field`.
+fn string_field(field: u32, s: &str) -> Vec<u8> {
+    let mut b = Vec::new();
+    Pb(&mut b).string(field, s);
+    b
 }
 
 impl RobotNames {
     /// The names of `info`'s robot.
     pub fn new(info: &RobotInfo) -> Self {
+        let parents = quadsim_systems::frame_parents(&info.model);
         RobotNames {
             robot: info.name.clone(),
-            joints: serde_json::to_string(&info.joint_names()).expect("strings serialise"),
-            feet: info.foot_names().iter().map(|n| quoted(n)).collect(),
+            joints: info
+                .joint_names()
+                .iter()
+                .flat_map(|n| string_field(2, n))
+                .collect(),
+            feet: info
+                .foot_names()
+                .iter()
+                .map(|n| string_field(1, n))
+                .collect(),
             frames: info
                 .model
                 .frames
                 .iter()
-                .map(|f| quoted(&frame_id(&info.name, &f.name)))
-                .collect(),
-            parents: quadsim_systems::frame_parents(&info.model)
-                .iter()
-                .map(|p| match p {
-                    Some(i) => quoted(&frame_id(&info.name, &info.model.frames[*i].name)),
-                    None => quoted(WORLD),
+                .zip(&parents)
+                .map(|(f, p)| {
+                    let parent = match p {
+                        Some(i) => frame_id(&info.name, &info.model.frames[*i].name),
+                        None => WORLD.to_string(),
+                    };
+                    let mut b = string_field(2, &parent);
+                    b.extend(string_field(3, &frame_id(&info.name, &f.name)));
+                    b
                 })
                 .collect(),
         }
@@ -297,7 +220,10 @@ impl RobotTopic {
 
 const WORLD: &str = "world";
 
-/// Encodes `topic` of sample `s` at `t_ns` into `out` (cleared first).
+/// Encodes `topic` of sample `s` at `t_ns` into `out` (cleared first), as
+/// protobuf (`foxglove.PoseInFrame`, `quadsim.*`: [`super::proto`]). Field
+/// numbers follow the schemas' declarations; an absent optional value
+/// (no joint targets, no virtual wrench, no such sensor) is left out.
 pub fn encode_robot(
     topic: RobotTopic,
     names: &RobotNames,
@@ -306,37 +232,31 @@ pub fn encode_robot(
     out: &mut Vec<u8>,
 ) {
     out.clear();
-    let mut j = Json(out);
-    j.start(t_ns);
+    let mut m = Pb(out);
+    m.time(1, t_ns);
     match topic {
         RobotTopic::BasePose => {
-            j.raw(",\"frame_id\":\"world\",\"pose\":{\"position\":");
-            j.v3(s.base_position_m);
-            j.raw(",\"orientation\":");
-            j.quat(s.base_orientation);
-            j.raw("}");
+            m.string(2, WORLD);
+            m.message(3, |p| {
+                p.v3(1, s.base_position_m);
+                p.quat(2, s.base_orientation);
+            });
         }
         RobotTopic::BaseTwist => {
-            j.raw(",\"frame_id\":\"world\",\"linear\":");
-            j.v3(s.base_linear_mps);
-            j.raw(",\"angular\":");
-            j.v3(s.base_angular_radps);
+            m.string(2, WORLD);
+            m.v3(3, s.base_linear_mps);
+            m.v3(4, s.base_angular_radps);
         }
         RobotTopic::Attitude => {
-            j.raw(",\"roll\":");
-            j.num(s.rpy_rad.x);
-            j.raw(",\"pitch\":");
-            j.num(s.rpy_rad.y);
-            j.raw(",\"yaw\":");
-            j.num(s.rpy_rad.z);
+            m.double(2, s.rpy_rad.x);
+            m.double(3, s.rpy_rad.y);
+            m.double(4, s.rpy_rad.z);
         }
         RobotTopic::Com => {
-            j.raw(",\"frame_id\":\"world\",\"position\":");
-            j.v3(s.com_m);
-            j.raw(",\"velocity\":");
-            j.v3(s.com_velocity_mps);
-            j.raw(",\"acceleration\":");
-            j.v3(s.com_acceleration_mps2);
+            m.string(2, WORLD);
+            m.v3(3, s.com_m);
+            m.v3(4, s.com_velocity_mps);
+            m.v3(5, s.com_acceleration_mps2);
         }
         RobotTopic::JointStates | RobotTopic::JointCommands => {
             let (p, v, e) = if topic == RobotTopic::JointStates {
@@ -352,149 +272,79 @@ pub fn encode_robot(
                     &s.joint_effort_command,
                 )
             };
-            j.raw(",\"name\":");
-            j.raw(&names.joints);
-            j.raw(",\"position\":");
-            j.nums(p);
-            j.raw(",\"velocity\":");
-            j.nums(v);
-            j.raw(",\"effort\":");
-            j.nums(Some(e));
+            m.0.extend_from_slice(&names.joints);
+            m.doubles(3, p.unwrap_or_default());
+            m.doubles(4, v.unwrap_or_default());
+            m.doubles(5, e);
         }
         RobotTopic::Feet => {
-            j.raw(",\"frame_id\":\"world\",\"feet\":[");
-            for (i, (f, name)) in s.feet.iter().zip(&names.feet).enumerate() {
-                if i > 0 {
-                    j.raw(",");
-                }
-                j.raw("{\"name\":");
-                j.raw(name);
-                j.raw(",\"in_contact\":");
-                j.bool(f.in_contact);
-                j.raw(",\"slipping\":");
-                j.bool(f.slipping);
-                j.raw(",\"penetration_m\":");
-                j.num(f.penetration_m);
-                j.raw(",\"normal_force_n\":");
-                j.num(f.normal_force_n);
-                j.raw(",\"force\":");
-                j.v3(f.force_n);
-                j.raw(",\"position\":");
-                j.v3(f.position_m);
-                j.raw(",\"gait_phase\":");
-                match f.gait_phase {
-                    Some(x) => j.num(x),
-                    None => j.raw("null"),
-                }
-                j.raw("}");
+            m.string(2, WORLD);
+            for (f, name) in s.feet.iter().zip(&names.feet) {
+                m.message(3, |c| {
+                    c.0.extend_from_slice(name);
+                    c.bool(2, f.in_contact);
+                    c.bool(3, f.slipping);
+                    c.double(4, f.penetration_m);
+                    c.double(5, f.normal_force_n);
+                    c.v3(6, f.force_n);
+                    c.v3(7, f.position_m);
+                    if let Some(x) = f.gait_phase {
+                        c.double(8, x);
+                    }
+                });
             }
-            j.raw("]");
         }
         RobotTopic::VirtualWrench => {
-            j.raw(",\"frame_id\":\"world\",\"force\":");
-            match s.virtual_wrench {
-                Some((f, t)) => {
-                    j.v3(f);
-                    j.raw(",\"torque\":");
-                    j.v3(t);
-                }
-                None => j.raw("null,\"torque\":null"),
+            m.string(2, WORLD);
+            if let Some((f, t)) = s.virtual_wrench {
+                m.v3(3, f);
+                m.v3(4, t);
             }
         }
         RobotTopic::Sensors => {
             // (the writer writes this topic only for robots with sensors)
             let Some(x) = &s.sensing else {
-                j.raw("}");
                 return;
             };
-            j.raw(",\"imu_accel_mps2\":");
-            match x.imu {
-                Some((a, _)) => j.v3(a),
-                None => j.raw("null"),
+            if let Some((a, g)) = x.imu {
+                m.v3(2, a);
+                m.v3(3, g);
             }
-            j.raw(",\"imu_gyro_radps\":");
-            match x.imu {
-                Some((_, g)) => j.v3(g),
-                None => j.raw("null"),
-            }
-            j.raw(",\"encoder_position_rad\":");
-            j.nums(x.encoder_position_rad.as_deref());
-            j.raw(",\"encoder_velocity_radps\":");
-            j.nums(x.encoder_velocity_radps.as_deref());
-            j.raw(",\"contact\":[");
-            for (i, &c) in x.contact.iter().enumerate() {
-                if i > 0 {
-                    j.raw(",");
-                }
-                j.bool(c);
-            }
-            j.raw("],\"estimate\":");
-            match &x.estimate {
-                Some(e) => {
-                    j.raw("{\"position\":");
-                    j.v3(e.position_m);
-                    j.raw(",\"orientation\":");
-                    j.quat(e.orientation);
-                    j.raw(",\"velocity\":");
-                    j.v3(e.velocity_world_mps);
-                    j.raw(",\"height_m\":");
-                    j.num(e.height_m);
-                    j.raw("}");
-                }
-                None => j.raw("null"),
+            m.doubles(4, x.encoder_position_rad.as_deref().unwrap_or_default());
+            m.doubles(5, x.encoder_velocity_radps.as_deref().unwrap_or_default());
+            m.bools(6, &x.contact);
+            if let Some(e) = &x.estimate {
+                m.message(7, |b| {
+                    b.v3(1, e.position_m);
+                    b.quat(2, e.orientation);
+                    b.v3(3, e.velocity_world_mps);
+                    b.double(4, e.height_m);
+                });
             }
         }
     }
-    j.raw("}");
 }
 
-/// Encodes the `/tf` message: every link frame of every sampled robot in its
-/// parent link's frame (the base link in `world`), a tree like ROS's
-/// `robot_state_publisher` publishes. Single precision (about 1e-7 relative:
-/// display only; the robot channels carry full precision).
+/// Encodes the `/tf` message (`foxglove.FrameTransforms`, protobuf): every
+/// link frame of every sampled robot in its parent link's frame (the base
+/// link in `world`), a tree like ROS's `robot_state_publisher` publishes, in
+/// full precision.
 pub fn encode_transforms(samples: &[(&RobotNames, &RobotSample)], t_ns: u64, out: &mut Vec<u8>) {
     out.clear();
-    let mut j = Json(out);
-    let time = Time::from_ns(t_ns);
-    j.raw("{\"transforms\":[");
-    let mut first = true;
+    // the timestamp field, the same in every transform
+    let mut time = Vec::with_capacity(16);
+    Pb(&mut time).time(1, t_ns);
+    let mut m = Pb(out);
     for (names, s) in samples {
-        for ((pose, child), parent) in s
-            .link_transforms
-            .iter()
-            .zip(&names.frames)
-            .zip(&names.parents)
-        {
-            if !first {
-                j.raw(",");
-            }
-            first = false;
-            j.raw("{\"timestamp\":");
-            j.time(time);
-            j.raw(",\"parent_frame_id\":");
-            j.raw(parent);
-            j.raw(",\"child_frame_id\":");
-            j.raw(child);
-            let t = pose.0.as_vec3();
-            j.raw(",\"translation\":{\"x\":");
-            j.num32(t.x);
-            j.raw(",\"y\":");
-            j.num32(t.y);
-            j.raw(",\"z\":");
-            j.num32(t.z);
-            let q = pose.1.as_quat();
-            j.raw("},\"rotation\":{\"x\":");
-            j.num32(q.x);
-            j.raw(",\"y\":");
-            j.num32(q.y);
-            j.raw(",\"z\":");
-            j.num32(q.z);
-            j.raw(",\"w\":");
-            j.num32(q.w);
-            j.raw("}}");
+        for (pose, frames) in s.link_transforms.iter().zip(&names.frames) {
+            m.message(1, |f| {
+                f.0.extend_from_slice(&time);
+                f.0.extend_from_slice(frames);
+                f.v3(4, pose.0);
+                f.quat(5, pose.1);
+            });
         }
     }
-    j.raw("]}");
 }
 
 /// RGBA in 0–1.

@@ -2,8 +2,9 @@
 //! the `mcap` libraries). See `docs/logs.md` for the channels and how to open
 //! a log.
 //!
-//! - [`schema`]: the JSON Schemas of every channel;
-//! - [`encode`]: JSON encoding of the simulation's samples;
+//! - [`schema`]: the schemas of every channel (protobuf or JSON);
+//! - [`proto`]: protobuf encoding, descriptors and decoding;
+//! - [`encode`]: encoding of the simulation's samples;
 //! - [`writer`]: the MCAP writer thread;
 //! - [`read`]: reading a log back (tolerates a truncated file);
 //! - [`interrupt`]: Ctrl-C / SIGTERM as a flag the run loop polls;
@@ -13,6 +14,7 @@
 
 pub mod encode;
 pub mod interrupt;
+pub mod proto;
 pub mod read;
 pub mod schema;
 pub mod select;

@@ -2,19 +2,21 @@
 //! and the metadata records. The reader streams from the start and does not
 //! need the summary section, so a file cut short (a killed process) yields
 //! every message of its complete chunks; [`LogContents::error`] then says
-//! where reading stopped.
+//! where reading stopped. Protobuf messages are decoded by the descriptors
+//! stored in the log itself ([`LogMessage::json`]).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use mcap::read::{LinearReader, Options};
 use mcap::records::Record;
+use prost_reflect::MessageDescriptor;
 use serde_json::Value;
 
 use super::writer::LogError;
 
 /// One message of the log.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct LogMessage {
     /// Its channel's topic.
     pub topic: String,
@@ -22,8 +24,24 @@ pub struct LogMessage {
     pub schema: String,
     /// Log time (ns of simulation time).
     pub log_time_ns: u64,
-    /// The encoded message (JSON).
+    /// The encoded message (JSON or protobuf, by its channel's encoding).
     pub data: Vec<u8>,
+    /// The message's protobuf descriptor (from the schema in the log) when
+    /// its channel is protobuf; `None` for JSON.
+    pub descriptor: Option<MessageDescriptor>,
+}
+
+/// Equal messages: same topic, schema, time and bytes (descriptors by name:
+/// two reads of one log hold equal descriptors in distinct pools).
+impl PartialEq for LogMessage {
+    fn eq(&self, other: &Self) -> bool {
+        self.topic == other.topic
+            && self.schema == other.schema
+            && self.log_time_ns == other.log_time_ns
+            && self.data == other.data
+            && self.descriptor.as_ref().map(MessageDescriptor::full_name)
+                == other.descriptor.as_ref().map(MessageDescriptor::full_name)
+    }
 }
 
 impl LogMessage {
@@ -32,10 +50,30 @@ impl LogMessage {
         self.log_time_ns as f64 * 1e-9
     }
 
-    /// The message decoded as JSON.
+    /// The message as JSON: a JSON message parsed, a protobuf message
+    /// decoded by its schema into the same shape ([`super::proto::to_json`]:
+    /// field names as declared, absent values and non-finite numbers null).
     pub fn json(&self) -> Result<Value, serde_json::Error> {
-        serde_json::from_slice(&self.data)
+        match &self.descriptor {
+            Some(d) => super::proto::to_json(d, &self.data).map_err(|e| {
+                <serde_json::Error as serde::de::Error>::custom(format!(
+                    "{}: protobuf {}: {e}",
+                    self.topic,
+                    d.full_name()
+                ))
+            }),
+            None => serde_json::from_slice(&self.data),
+        }
     }
+}
+
+/// A schema as stored in the log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogSchema {
+    /// Schema encoding (`protobuf`, `jsonschema`).
+    pub encoding: String,
+    /// Schema data (a `FileDescriptorSet`, a JSON Schema's text).
+    pub data: Vec<u8>,
 }
 
 /// What a log holds.
@@ -45,8 +83,8 @@ pub struct LogContents {
     pub messages: Vec<LogMessage>,
     /// Metadata records by name (a later record of the same name wins).
     pub metadata: BTreeMap<String, BTreeMap<String, String>>,
-    /// Schema text (JSON Schema) by schema name.
-    pub schemas: BTreeMap<String, String>,
+    /// Schemas by name.
+    pub schemas: BTreeMap<String, LogSchema>,
     /// Why reading stopped early (a truncated or damaged file), if it did.
     pub error: Option<String>,
 }
@@ -107,27 +145,51 @@ pub fn read_log_bytes(buf: &[u8]) -> LogContents {
 /// [`read_log_bytes`], keeping only the messages of topics for which `keep` holds.
 pub fn read_log_bytes_topics(buf: &[u8], keep: &dyn Fn(&str) -> bool) -> LogContents {
     let mut out = LogContents::default();
+    let mut descriptors: BTreeMap<String, Option<MessageDescriptor>> = BTreeMap::new();
     match mcap::MessageStream::new_with_options(buf, Options::IgnoreEndMagic.into()) {
         Ok(stream) => {
             for m in stream {
                 match m {
                     Ok(m) if !keep(&m.channel.topic) => {}
                     Ok(m) => {
-                        let (schema, text) = m.channel.schema.as_ref().map_or_else(
-                            || (String::new(), None),
-                            |s| (s.name.clone(), Some(&s.data)),
-                        );
-                        if let Some(text) = text
-                            && !out.schemas.contains_key(&schema)
+                        let schema = m.channel.schema.as_ref();
+                        let name = schema.map_or_else(String::new, |s| s.name.clone());
+                        if let Some(s) = schema
+                            && !out.schemas.contains_key(&name)
                         {
-                            out.schemas
-                                .insert(schema.clone(), String::from_utf8_lossy(text).into());
+                            out.schemas.insert(
+                                name.clone(),
+                                LogSchema {
+                                    encoding: s.encoding.clone(),
+                                    data: s.data.to_vec(),
+                                },
+                            );
                         }
+                        let descriptor = if m.channel.message_encoding == "protobuf" {
+                            let d = descriptors.entry(name.clone()).or_insert_with(|| {
+                                schema.and_then(|s| {
+                                    super::proto::message_descriptor(&s.data, &s.name).ok()
+                                })
+                            });
+                            match d {
+                                Some(d) => Some(d.clone()),
+                                None => {
+                                    out.error = Some(format!(
+                                        "{}: no usable protobuf schema {name}",
+                                        m.channel.topic
+                                    ));
+                                    break;
+                                }
+                            }
+                        } else {
+                            None
+                        };
                         out.messages.push(LogMessage {
                             topic: m.channel.topic.clone(),
-                            schema,
+                            schema: name,
                             log_time_ns: m.log_time,
                             data: m.data.into_owned(),
+                            descriptor,
                         });
                     }
                     Err(e) => {

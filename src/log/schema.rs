@@ -1,5 +1,10 @@
-//! JSON Schemas (draft 2020-12 vocabulary, `jsonschema` schema encoding in
-//! MCAP) of every channel of `log.mcap`.
+//! The schemas of every channel of `log.mcap`. The per-step channels are
+//! protobuf (message and schema encoding `protobuf`; the schema data is a
+//! `FileDescriptorSet`, [`super::proto`]); the rare ones (`/scene`,
+//! `/terrain`, `/<robot>/metrics`) are JSON with a JSON Schema (draft 2020-12
+//! vocabulary, schema encoding `jsonschema`). [`Schema::json`] also gives a
+//! JSON Schema of each protobuf message's decoded JSON form (what
+//! [`super::read::LogMessage::json`] returns), for documentation.
 //!
 //! `foxglove.*` schemas follow the shapes Foxglove publishes for its
 //! well-known types (`foxglove.PoseInFrame`, `foxglove.FrameTransforms`,
@@ -74,7 +79,45 @@ impl Schema {
         }
     }
 
-    /// The JSON Schema.
+    /// Whether the channel is protobuf (else JSON).
+    pub fn is_protobuf(self) -> bool {
+        !matches!(
+            self,
+            Schema::RobotMetrics | Schema::SceneUpdate | Schema::TerrainDescription
+        )
+    }
+
+    /// The MCAP message encoding of the schema's channels.
+    pub fn message_encoding(self) -> &'static str {
+        if self.is_protobuf() {
+            "protobuf"
+        } else {
+            "json"
+        }
+    }
+
+    /// The MCAP schema encoding.
+    pub fn schema_encoding(self) -> &'static str {
+        if self.is_protobuf() {
+            "protobuf"
+        } else {
+            "jsonschema"
+        }
+    }
+
+    /// The MCAP schema data: a binary `FileDescriptorSet` for protobuf, the
+    /// JSON Schema's text for JSON.
+    pub fn data(self) -> Vec<u8> {
+        match self {
+            Schema::PoseInFrame | Schema::FrameTransforms => {
+                super::proto::foxglove_descriptor_set(self.name())
+            }
+            _ if self.is_protobuf() => super::proto::quadsim_descriptor_set(),
+            _ => serde_json::to_vec(&self.json()).expect("schema serialises"),
+        }
+    }
+
+    /// The JSON Schema (of the message's JSON form for a protobuf channel).
     pub fn json(self) -> Value {
         let mut v = match self {
             Schema::PoseInFrame => object(
@@ -331,7 +374,37 @@ impl Schema {
             ),
         };
         v["title"] = json!(self.name());
+        if self.is_protobuf() {
+            protobuf_times(&mut v);
+        }
         v
+    }
+}
+
+/// In a protobuf message's JSON form a `timestamp` is a
+/// `google.protobuf.Timestamp`: `{seconds, nanos}`.
+fn protobuf_times(v: &mut Value) {
+    match v {
+        Value::Object(map) => {
+            for (k, x) in map.iter_mut() {
+                if k == "timestamp" && x.get("title") == Some(&json!("time")) {
+                    let d = x["description"].clone();
+                    *x = json!({
+                        "type": "object",
+                        "title": "google.protobuf.Timestamp",
+                        "description": d,
+                        "properties": {
+                            "seconds": {"type": "integer", "minimum": 0},
+                            "nanos": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
+                        },
+                    });
+                } else {
+                    protobuf_times(x);
+                }
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(protobuf_times),
+        _ => {}
     }
 }
 

@@ -51,8 +51,7 @@ pub struct RobotSeries {
     pub feet: Vec<Vec<FootPoint>>,
 }
 
-/// The fields the series need, decoded straight into typed structs (much
-/// cheaper than a generic JSON tree; other fields are skipped).
+/// The fields the series need, as typed structs (other fields are skipped).
 mod msg {
     use serde::Deserialize;
 
@@ -123,7 +122,8 @@ impl RobotSeries {
         ) -> Result<Vec<(f64, T)>, String> {
             c.topic(topic)
                 .map(|m| {
-                    serde_json::from_slice(&m.data)
+                    m.json()
+                        .and_then(serde_json::from_value)
                         .map(|j| (m.t_s(), j))
                         .map_err(|e| format!("{topic}: {e}"))
                 })

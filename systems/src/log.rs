@@ -204,6 +204,68 @@ pub fn frame_parents(model: &Model) -> Vec<Option<usize>> {
         .collect()
 }
 
+/// A rigid transform as (translation, rotation): `p_parent = t + r·p_child`.
+type Rigid = (DVec3, DQuat);
+
+/// How one link frame's transform in its parent frame is made (see
+/// [`tf_plan`]): the parts that do not depend on the state are composed
+/// once per model, so a sample composes at most three transforms per frame.
+#[derive(Clone, Copy, Debug)]
+enum TfFrame {
+    /// A frame hanging from the world: its world pose from the kinematics.
+    Root,
+    /// A frame fixed in its parent frame (links merged by fixed joints).
+    Fixed(Rigid),
+    /// `pre ∘ joint motion(q) ∘ post`: `pre` = parent frame → joint frame,
+    /// `post` = joint body → this frame.
+    Joint {
+        /// Parent frame to the joint frame.
+        pre: Rigid,
+        /// The joint's body to this frame.
+        post: Rigid,
+    },
+}
+
+fn quat_of(t: &Transform) -> DQuat {
+    if t.rot == glam::DMat3::IDENTITY {
+        DQuat::IDENTITY
+    } else {
+        DQuat::from_mat3(&t.rot).normalize()
+    }
+}
+
+fn compose((ta, qa): Rigid, (tb, qb): Rigid) -> Rigid {
+    (ta + qa * tb, qa * qb)
+}
+
+/// The state-independent parts of every link frame's transform in its
+/// parent frame ([`frame_parents`]), computed once per model.
+fn tf_plan(model: &Model, parents: &[Option<usize>]) -> Vec<TfFrame> {
+    let in_body = |f: usize| {
+        let p = &model.frames[f].placement;
+        (p.trans, quat_of(p))
+    };
+    let inverse = |(t, r): Rigid| (-(r.inverse() * t), r.inverse());
+    (0..model.frames.len())
+        .map(|f| {
+            let b = model.frames[f].body;
+            match parents[f] {
+                None => TfFrame::Root,
+                Some(pf) if model.frames[pf].body == b => {
+                    TfFrame::Fixed(compose(inverse(in_body(pf)), in_body(f)))
+                }
+                Some(pf) => {
+                    let x = &model.placement[b];
+                    TfFrame::Joint {
+                        pre: compose(inverse(in_body(pf)), (x.trans, quat_of(x))),
+                        post: in_body(f),
+                    }
+                }
+            }
+        })
+        .collect()
+}
+
 /// The transforms of [`RobotSample::link_transforms`] at joint angles `q`
 /// (world poses in `data` for the base link and for frames without a parent body frame).
 fn link_transforms(
@@ -211,48 +273,30 @@ fn link_transforms(
     data: &Data,
     q: &[f64],
     base: DQuat,
-    parents: &[Option<usize>],
+    plan: &[TfFrame],
 ) -> Vec<(DVec3, DQuat)> {
-    let quat = |t: &Transform| {
-        if t.rot == glam::DMat3::IDENTITY {
-            DQuat::IDENTITY
-        } else {
-            DQuat::from_mat3(&t.rot).normalize()
-        }
-    };
-    // a frame in its body: (translation, rotation)
-    let in_body = |f: usize| {
-        let p = &model.frames[f].placement;
-        (p.trans, quat(p))
-    };
-    let compose = |(ta, qa): (DVec3, DQuat), (tb, qb): (DVec3, DQuat)| (ta + qa * tb, qa * qb);
-    let inverse = |(t, r): (DVec3, DQuat)| (-(r.inverse() * t), r.inverse());
-    (0..model.frames.len())
-        .map(|f| {
-            let b = model.frames[f].body;
-            match parents[f] {
-                None => {
-                    let pose = frame_pose(model, data, f);
-                    if f == 0 && model.frames[f].placement == Transform::IDENTITY {
-                        (pose.trans, base)
-                    } else {
-                        (pose.trans, quat(&pose))
-                    }
+    plan.iter()
+        .enumerate()
+        .map(|(f, how)| match *how {
+            TfFrame::Root => {
+                let pose = frame_pose(model, data, f);
+                if f == 0 && model.frames[f].placement == Transform::IDENTITY {
+                    (pose.trans, base)
+                } else {
+                    (pose.trans, quat_of(&pose))
                 }
-                Some(pf) if model.frames[pf].body == b => compose(inverse(in_body(pf)), in_body(f)),
-                Some(pf) => {
-                    // parent body frame → joint frame → joint motion → this frame
-                    let x = &model.placement[b];
-                    let qi = q[model.idx_q[b]];
-                    let axis = model.axis[b];
-                    let motion = match model.joint_type[b] {
-                        JointType::Revolute => (DVec3::ZERO, DQuat::from_axis_angle(axis, qi)),
-                        JointType::Prismatic => (axis * qi, DQuat::IDENTITY),
-                        JointType::Free | JointType::Anchored => (DVec3::ZERO, DQuat::IDENTITY),
-                    };
-                    let joint = compose((x.trans, quat(x)), motion);
-                    compose(inverse(in_body(pf)), compose(joint, in_body(f)))
-                }
+            }
+            TfFrame::Fixed(t) => t,
+            TfFrame::Joint { pre, post } => {
+                let b = model.frames[f].body;
+                let qi = q[model.idx_q[b]];
+                let axis = model.axis[b];
+                let motion = match model.joint_type[b] {
+                    JointType::Revolute => (DVec3::ZERO, DQuat::from_axis_angle(axis, qi)),
+                    JointType::Prismatic => (axis * qi, DQuat::IDENTITY),
+                    JointType::Free | JointType::Anchored => (DVec3::ZERO, DQuat::IDENTITY),
+                };
+                compose(compose(pre, motion), post)
             }
         })
         .collect()
@@ -293,8 +337,8 @@ struct Followed {
     data: Option<Data>,
     /// Contact evaluations at the snapshot (one per contact point).
     evals: Vec<ContactEval>,
-    /// [`frame_parents`] of the model.
-    parents: Vec<Option<usize>>,
+    /// [`tf_plan`] of the model.
+    tf: Vec<TfFrame>,
     /// `(q, v)` at the start of the current step.
     q: Vec<f64>,
     v: Vec<f64>,
@@ -408,7 +452,7 @@ pub fn start_sampling_each<C: SampleChannel>(
                 announced: None,
                 data: None,
                 evals: Vec::new(),
-                parents: Vec::new(),
+                tf: Vec::new(),
                 q: Vec::new(),
                 v: Vec::new(),
             })
@@ -554,7 +598,7 @@ fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>, due: Option
         };
         if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
             r.data = Some(Data::new(&sim.model));
-            r.parents = frame_parents(&sim.model);
+            r.tf = tf_plan(&sim.model, &frame_parents(&sim.model));
             r.model = Some(sim.model.clone());
         }
         r.q.clear();
@@ -602,7 +646,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
                 continue;
             }
             r.data = Some(Data::new(&sim.model));
-            r.parents = frame_parents(&sim.model);
+            r.tf = tf_plan(&sim.model, &frame_parents(&sim.model));
             r.model = Some(sim.model.clone());
         }
         jobs.push(SampleJob {
@@ -622,7 +666,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             &r.v,
             data,
             &mut r.evals,
-            C::LINK_TRANSFORMS.then_some(&r.parents[..]),
+            C::LINK_TRANSFORMS.then_some(&r.tf[..]),
         ));
     };
     match world.get_resource::<SimThreadPool>() {
@@ -652,7 +696,7 @@ fn sample_robot(
     v: &[f64],
     data: &mut Data,
     evals: &mut Vec<ContactEval>,
-    parents: Option<&[Option<usize>]>,
+    tf: Option<&[TfFrame]>,
 ) -> RobotSample {
     let model = &sim.model;
     forward_kinematics(model, data, q, v);
@@ -767,7 +811,7 @@ fn sample_robot(
             contact: x.contacts.clone(),
             estimate: x.estimator.as_ref().map(|e| e.estimate),
         }),
-        link_transforms: parents.map_or_else(Vec::new, |p| {
+        link_transforms: tf.map_or_else(Vec::new, |p| {
             link_transforms(model, data, q, base_orientation, p)
         }),
     }
