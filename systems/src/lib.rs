@@ -44,4 +44,4 @@ pub use schedule::{
 };
 pub use sense::{sense_robot, sense_robots};
 pub use simulation::Simulation;
-pub use step::{advance_clock, step_robot, step_robots};
+pub use step::{advance_clock, plan_groups, step_robot, step_robots};

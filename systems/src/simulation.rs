@@ -63,6 +63,7 @@ impl Simulation {
         world.init_resource::<PoseSync>();
         world.init_resource::<DirtyRobots>();
         world.init_resource::<SharedModels>();
+        world.init_resource::<quadsim_components::LaneBatching>();
         world.init_resource::<Ground>();
         world.init_resource::<DefaultGroundPlane>();
         world.init_resource::<ControlRate>();

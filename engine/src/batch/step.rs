@@ -4,7 +4,9 @@
 //!
 //! It repeats [`crate::integrate::step`] with [`Integrator::SemiImplicitEuler`](crate::integrate::Integrator)
 //! stage for stage: (1) forward kinematics (batched) copied into each robot's
-//! `Data`; (2) `τ = sat(τ_actuator) + τ_passive`; (3) the robot's
+//! `Data`; (2) `τ = sat(τ_actuator) + τ_passive` (with an
+//! [`ActuatorBank`](crate::actuator_model::ActuatorBank): its step start, then
+//! each motor's torque in its envelope plus friction); (3) the robot's
 //! [`ForceModel`] on its own `Data`; (4) ABA with the external forces
 //! (batched); (5) `v⁺ = v + dt·a`, `q⁺ = q ⊕ dt·v⁺`. Since the batched
 //! kinematics and ABA are bit-identical to the scalar ones, each robot ends
@@ -23,7 +25,7 @@ use crate::passive::{add_passive_torques, saturate};
 pub struct StepParts<'a, F> {
     /// Its kinematics/dynamics workspace.
     pub data: &'a mut Data,
-    /// Its integrator buffers and passive joint model (no imposed motion).
+    /// Its integrator buffers, passive joint model and actuator models (no imposed motion).
     pub ws: &'a mut StepWorkspace,
     /// Its state, advanced in place.
     pub state: &'a mut State,
@@ -60,7 +62,24 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
             p.ws.imposed.is_none(),
             "an imposed joint motion cannot be stepped in a batch"
         );
-        saturate(model, &p.ws.passive, p.tau_actuator, &mut p.ws.tau_actuator);
+        let StepWorkspace {
+            passive,
+            tau_actuator,
+            actuators,
+            ..
+        } = p.ws;
+        match actuators {
+            Some(bank) => bank.begin_step(
+                model,
+                passive,
+                &p.state.q,
+                &p.state.v,
+                p.tau_actuator,
+                dt_s,
+                tau_actuator,
+            ),
+            None => saturate(model, passive, p.tau_actuator, tau_actuator),
+        }
         bd.set_state(k, &p.state.q, &p.state.v);
     }
     forward_kinematics_batch(model, bd);
@@ -76,6 +95,9 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
         bd.kinematics_into(k, model, data, q, v);
         data.clear_external_forces();
         ws.tau.copy_from_slice(&ws.tau_actuator);
+        if let Some(bank) = &ws.actuators {
+            bank.apply(model, &ws.passive, v, &mut ws.tau);
+        }
         add_passive_torques(model, &ws.passive, q, v, &mut ws.tau);
         forces.apply(model, data, q, v, &mut ws.tau);
         bd.set_tau(k, &ws.tau);
