@@ -93,6 +93,10 @@ impl RateGate {
     }
 
     /// Whether [`RateGate::tick`] at `t_s` would sample (it does not advance).
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "exactly the negation of tick's test, NaN included"
+    )]
     pub fn due(&self, t_s: f64) -> bool {
         let eps = 1e-6 * self.period_s.max(1e-6);
         !(t_s + eps < self.next_t_s())
