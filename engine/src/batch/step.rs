@@ -4,7 +4,8 @@
 //!
 //! It repeats [`crate::integrate::step`] with [`Integrator::SemiImplicitEuler`](crate::integrate::Integrator)
 //! stage for stage: (1) forward kinematics (batched) copied into each robot's
-//! `Data`; (2) `τ = sat(τ_actuator) + τ_passive` (with an
+//! `Data`, or, when every robot's `Data` already holds them for its state,
+//! copied from there into the lanes; (2) `τ = sat(τ_actuator) + τ_passive` (with an
 //! [`ActuatorBank`](crate::actuator_model::ActuatorBank): its step start, then
 //! each motor's torque in its envelope plus friction); (3) the robot's
 //! [`ForceModel`] on its own `Data`; (4) ABA with the external forces
@@ -82,7 +83,20 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
         }
         bd.set_state(k, &p.state.q, &p.state.v);
     }
-    forward_kinematics_batch(model, bd);
+    // The kinematics at the step's start state are usually in every robot's
+    // `Data` already (the caller observed the robots there): reuse them.
+    let mut held = true;
+    for robot in robots.iter_mut() {
+        let p = parts(robot);
+        held &= p.data.kinematics_hold(model, &p.state.q, &p.state.v);
+    }
+    if held {
+        for (k, robot) in robots.iter_mut().enumerate() {
+            bd.kinematics_from(k, model, parts(robot).data);
+        }
+    } else {
+        forward_kinematics_batch(model, bd);
+    }
     for (k, robot) in robots.iter_mut().enumerate() {
         let StepParts {
             data,
@@ -92,7 +106,9 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
             ..
         } = parts(robot);
         let (q, v) = (&state.q[..], &state.v[..]);
-        bd.kinematics_into(k, model, data, q, v);
+        if !held {
+            bd.kinematics_into(k, model, data, q, v);
+        }
         data.clear_external_forces();
         ws.tau.copy_from_slice(&ws.tau_actuator);
         if let Some(bank) = &ws.actuators {
