@@ -70,8 +70,8 @@ pub use link::{
 };
 pub use payload::{PayloadAction, PayloadEvent, PayloadEvents};
 pub use resources::{
-    ControlView, PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock, SimConfig,
-    SimThreadPool, ThreadPoolError,
+    ControlView, LaneBatching, PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock,
+    SimConfig, SimThreadPool, ThreadPoolError,
 };
 pub use robot::{
     BelongsTo, CompileFailure, Robot, RobotBase, RobotIndex, RobotModelName, RobotParts,

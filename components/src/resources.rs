@@ -102,9 +102,72 @@ impl SimThreadPool {
         }
     }
 
+    /// Applies `f` to every group of consecutive items, group `g` being
+    /// `items[ends[g − 1]..ends[g]]` (`ends` strictly increasing, the last
+    /// equal to `items.len()`): in parallel on the pool's workers (the groups
+    /// halved recursively with `rayon::join`) when there are at least
+    /// [`PARALLEL_MIN_ITEMS`] items in two or more groups and more than one
+    /// worker, else in order on the calling thread. Groups are independent,
+    /// so the result is the same either way. Allocates nothing.
+    ///
+    /// # Panics
+    /// If `ends` does not partition `items` as above.
+    pub fn for_each_group<T: Send>(
+        &self,
+        items: &mut [T],
+        ends: &[usize],
+        f: impl Fn(&mut [T]) + Sync + Send,
+    ) {
+        assert_eq!(ends.last().copied().unwrap_or(0), items.len());
+        if self.threads() <= 1 || items.len() < PARALLEL_MIN_ITEMS || ends.len() < 2 {
+            let mut start = 0;
+            for &end in ends {
+                f(&mut items[start..end]);
+                start = end;
+            }
+        } else {
+            self.pool.install(|| split_groups(items, 0, ends, &f));
+        }
+    }
+
     /// Runs `f` inside the pool, so rayon's parallel iterators in it use these workers.
     pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
         self.pool.install(f)
+    }
+}
+
+/// `f` on each group of `items` (which starts at index `offset` of the whole),
+/// halving the groups into two `rayon::join` tasks until one is left.
+fn split_groups<T: Send, F: Fn(&mut [T]) + Sync>(
+    items: &mut [T],
+    offset: usize,
+    ends: &[usize],
+    f: &F,
+) {
+    if let [_] = ends {
+        f(items);
+        return;
+    }
+    let mid = ends.len() / 2;
+    let cut = ends[mid - 1] - offset;
+    let (left, right) = items.split_at_mut(cut);
+    rayon::join(
+        || split_groups(left, offset, &ends[..mid], f),
+        || split_groups(right, offset + cut, &ends[mid..], f),
+    );
+}
+
+/// Whether the step puts robots of one model into SIMD lanes, four at a time
+/// ([`quadsim_engine::batch`]). On by default. The batched dynamics are
+/// bit-identical to the scalar step, so this changes speed only; off is for
+/// comparisons and tests.
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LaneBatching(pub bool);
+
+impl Default for LaneBatching {
+    /// On.
+    fn default() -> Self {
+        Self(true)
     }
 }
 

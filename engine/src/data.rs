@@ -120,6 +120,17 @@ impl Data {
         }
     }
 
+    /// Whether the kinematic fields (poses, subspaces, velocities, reference
+    /// inertias) hold [`crate::kinematics::forward_kinematics`] at `(q, v)` of
+    /// `model`, bit for bit (what its cache checks).
+    pub fn kinematics_hold(&self, model: &Model, q: &[f64], v: &[f64]) -> bool {
+        let k = &self.kin;
+        let same = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        k.level == 2 && k.model == model as *const Model as usize && same(&k.q, q) && same(&k.v, v)
+    }
+
     /// Forgets which state the kinematic fields hold (after writing them by hand).
     pub fn invalidate_kinematics(&mut self) {
         self.kin.level = 0;

@@ -137,7 +137,10 @@ pub enum ModelError {
 /// `nbodies`; arrays indexed by velocity have length `nv`.
 #[derive(Clone, Debug)]
 pub struct Model {
-    /// Robot name.
+    /// Name of the description it was compiled from. Robots of one
+    /// articulation may share one model (see [`Model::same_articulation`]),
+    /// which then carries the first one's name: a robot's own name is kept
+    /// beside the model (its `Robot` component in the ECS).
     pub name: String,
     /// Configuration size.
     pub nq: usize,
@@ -422,6 +425,69 @@ impl Model {
             }
         }
         Ok(m)
+    }
+
+    /// Whether `other` describes the same articulation: every field equal
+    /// (numbers compared as `f64`, so `+0 = −0`) except [`Model::name`].
+    /// Robots whose models are the same articulation can share one model and
+    /// be stepped together in SIMD lanes ([`crate::batch`]); the name is the
+    /// only per-robot field (it is the robot's own name after a scenario
+    /// build, which keeps it beside the model).
+    pub fn same_articulation(&self, other: &Model) -> bool {
+        // Destructured in full, so that a new field cannot be forgotten here.
+        let Model {
+            name: _,
+            nq,
+            nv,
+            nbodies,
+            parent,
+            joint_type,
+            joint_name,
+            placement,
+            axis,
+            inertia,
+            idx_q,
+            idx_v,
+            v_body,
+            lower_limit,
+            upper_limit,
+            effort_limit,
+            velocity_limit,
+            damping,
+            friction,
+            armature,
+            frames,
+            feet,
+            gravity,
+            total_mass,
+            springs,
+            load_nv,
+        } = self;
+        *nq == other.nq
+            && *nv == other.nv
+            && *nbodies == other.nbodies
+            && *load_nv == other.load_nv
+            && *parent == other.parent
+            && *joint_type == other.joint_type
+            && *joint_name == other.joint_name
+            && *placement == other.placement
+            && *axis == other.axis
+            && *inertia == other.inertia
+            && *idx_q == other.idx_q
+            && *idx_v == other.idx_v
+            && *v_body == other.v_body
+            && *lower_limit == other.lower_limit
+            && *upper_limit == other.upper_limit
+            && *effort_limit == other.effort_limit
+            && *velocity_limit == other.velocity_limit
+            && *damping == other.damping
+            && *friction == other.friction
+            && *armature == other.armature
+            && *frames == other.frames
+            && *feet == other.feet
+            && *gravity == other.gravity
+            && *total_mass == other.total_mass
+            && *springs == other.springs
     }
 
     /// Size of the actuated part of v: the base and the joints, without

@@ -495,3 +495,58 @@ fn sensor_streams_follow_the_seed_only() {
         "another seed, other readings"
     );
 }
+
+/// `due` predicts `update` without advancing: over a 2 kHz clock, sensors at
+/// 500 Hz, 333 Hz (not a divisor of the clock) and 2 kHz, with mocap, each
+/// sensor is due exactly when its update samples, and `any_due` is false
+/// exactly on the steps where `update` reports nothing (which the `Sense`
+/// stage skips).
+#[test]
+fn due_predicts_a_sample_without_taking_it() {
+    for rate_hz in [500.0, 333.0, 2000.0] {
+        let mut cfg = SensorConfig::defaults_for("quad16", rate_hz);
+        cfg.mocap = Some(SensorConfig::default_mocap());
+        let mut s = SensorSuite::new(&cfg, 7, 16, 4, 0.0);
+        let (q, qd, f) = ([0.1; 16], [0.2; 16], [100.0; 4]);
+        let mut quiet = 0;
+        for k in 0..400 {
+            let t_s = k as f64 * 0.0005;
+            let due = [
+                s.imu.as_ref().unwrap().due(t_s),
+                s.encoders.as_ref().unwrap().due(t_s),
+                s.contacts.as_ref().unwrap().due(t_s),
+                s.mocap.as_ref().unwrap().due(t_s),
+            ];
+            let any = s.any_due(t_s);
+            let before = format!("{s:?}");
+            let u = s.update(&SensorTruth {
+                t_s,
+                position_m: DVec3::new(0.0, 0.0, 0.5),
+                orientation: DQuat::IDENTITY,
+                velocity_world_mps: DVec3::X,
+                omega_body_radps: DVec3::ZERO,
+                gravity_mps2: STANDARD_GRAVITY,
+                q_joints_rad: &q,
+                qd_joints_radps: &qd,
+                foot_normal_force_n: &f,
+            });
+            assert_eq!(
+                due[..3],
+                [u.imu, u.encoders, u.contacts],
+                "{rate_hz} Hz, step {k}"
+            );
+            assert_eq!(any, due.iter().any(|&d| d), "{rate_hz} Hz, step {k}");
+            if !any {
+                quiet += 1;
+                assert_eq!(
+                    before,
+                    format!("{s:?}"),
+                    "an update with nothing due changed the suite"
+                );
+            }
+        }
+        if rate_hz < 2000.0 {
+            assert!(quiet > 200, "{rate_hz} Hz: {quiet} quiet steps of 400");
+        }
+    }
+}

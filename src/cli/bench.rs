@@ -6,7 +6,8 @@
 //! 1.5 m × 1 m apart), warmed up, then timed over `--repeats` blocks of
 //! `--steps` steps; the median block is reported. Memory per robot is
 //! (live heap bytes with `n` robots − bytes with none) / n, counted by the
-//! binary's allocator ([`crate::mem`]); models are per robot today.
+//! binary's allocator ([`crate::mem`]); robots of one design share one model,
+//! counted once.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -39,6 +40,10 @@ pub struct BenchArgs {
     /// Robot model: `quad16` (trotting under VMC at 0.5 m/s) or `quad12` (standing under joint PD).
     #[arg(long, default_value = "quad16")]
     pub model: String,
+    /// Step the robots one by one instead of four of one model at a time in
+    /// SIMD lanes (the results are the same; for comparing the speed).
+    #[arg(long)]
+    pub no_lanes: bool,
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -114,6 +119,9 @@ pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoin
     drop(empty);
     let before = crate::mem::live_bytes();
     let mut w = build(robots)?;
+    w.sim
+        .world
+        .insert_resource(quadsim_components::LaneBatching(!a.no_lanes));
     w.sim.run(a.warmup.max(1));
     let with = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
     let bytes_per_robot = match (with, base) {

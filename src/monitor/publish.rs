@@ -179,7 +179,7 @@ impl FramePublisher {
                 "index": i,
                 "name": r.name,
                 "model": self.models.iter().find(|(n, _)| n == &r.name)
-                    .map_or(r.model.name.as_str(), |(_, m)| m.as_str()),
+                    .map_or(r.description.name.as_str(), |(_, m)| m.as_str()),
                 "dof": r.model.actuated_nv() - r.model.base_nv(),
                 "joints": r.joint_names(),
                 "feet": r.foot_names(),

@@ -7,7 +7,7 @@
 //! [`Model`] and installs it in the [`RobotBatch`]. A robot that does not
 //! compile gets a [`CompileFailure`] and keeps its last valid model.
 
-use std::sync::Arc;
+use std::sync::{Arc, Weak};
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
@@ -33,6 +33,57 @@ pub struct DirtyRobots {
     pub robots: Vec<Entity>,
     /// A robot was despawned: drop its slot and renumber [`RobotIndex`].
     pub prune: bool,
+}
+
+/// The compiled models in use, interned by articulation
+/// ([`Model::same_articulation`], which ignores the name): robots of one
+/// design share one `Arc<Model>`, so the step can put them in SIMD lanes
+/// together and the model's memory is paid once. Holds weak references: a
+/// model lives as long as a robot uses it.
+#[derive(Resource, Debug, Default)]
+pub struct SharedModels {
+    /// Models by a cheap key (nq, nv, nbodies, total mass bits); equal keys
+    /// are told apart by the full comparison.
+    by_key: std::collections::HashMap<(usize, usize, usize, u64), Vec<Weak<Model>>>,
+}
+
+impl SharedModels {
+    /// The shared model of `model`'s articulation: an existing one if a live
+    /// robot uses the same articulation, else `model`, now shared.
+    pub fn intern(&mut self, model: Model) -> Arc<Model> {
+        let key = (
+            model.nq,
+            model.nv,
+            model.nbodies,
+            model.total_mass.to_bits(),
+        );
+        let bucket = self.by_key.entry(key).or_default();
+        bucket.retain(|w| w.strong_count() > 0);
+        if let Some(shared) = bucket
+            .iter()
+            .filter_map(Weak::upgrade)
+            .find(|m| m.same_articulation(&model))
+        {
+            return shared;
+        }
+        let shared = Arc::new(model);
+        bucket.push(Arc::downgrade(&shared));
+        shared
+    }
+
+    /// Number of distinct live models.
+    pub fn len(&self) -> usize {
+        self.by_key
+            .values()
+            .flatten()
+            .filter(|w| w.strong_count() > 0)
+            .count()
+    }
+
+    /// True when no live model is interned.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// The compile schedule: [`mark_dirty_robots`] then [`compile_dirty_robots`],
@@ -244,7 +295,8 @@ fn compile_robot(world: &mut World, batch: &mut RobotBatch, root: Entity, config
     }
     world.entity_mut(root).remove::<CompileFailure>();
     let control = ControlView::of(&desc, &model, base);
-    let mut sim = RobotSim::new(root, Arc::new(model), links, config.passive);
+    let model = world.get_resource_or_init::<SharedModels>().intern(model);
+    let mut sim = RobotSim::new(root, model, links, config.passive);
     sim.control = control;
     sim.workspace.actuators = actuators
         .filter(|a| !a.specs.iter().all(|s| s.kind == ActuatorKind::Ideal))

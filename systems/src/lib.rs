@@ -23,7 +23,8 @@ mod simulation;
 mod step;
 
 pub use compile::{
-    CompileSchedule, DirtyRobots, build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
+    CompileSchedule, DirtyRobots, SharedModels, build_compile_schedule, compile_dirty_robots,
+    mark_dirty_robots,
 };
 pub use contact::{height_above_ground, observe_robot, update_contacts};
 pub use control::{control_robot, control_robot_at, run_controllers};
@@ -43,4 +44,4 @@ pub use schedule::{
 };
 pub use sense::{sense_robot, sense_robots};
 pub use simulation::Simulation;
-pub use step::{advance_clock, step_robot, step_robots};
+pub use step::{advance_clock, plan_groups, step_robot, step_robots};

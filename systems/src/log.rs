@@ -571,9 +571,15 @@ fn announce_if_changed<C: SampleChannel>(
         .iter()
         .filter_map(|r| {
             let sim = robot_sim(world, r.entity)?;
-            let name = world
-                .get::<Robot>(r.entity)
-                .map_or_else(|| sim.model.name.clone(), |x| x.name.clone());
+            let name = world.get::<Robot>(r.entity).map_or_else(
+                // (not the model's: robots of one design share it)
+                || {
+                    world
+                        .get::<quadsim_components::RobotModelName>(r.entity)
+                        .map_or_else(String::new, |n| n.0.clone())
+                },
+                |x| x.name.clone(),
+            );
             Some(RobotInfo {
                 name,
                 model: sim.model.clone(),

@@ -1,27 +1,137 @@
 //! Time integration of every robot, in parallel, and the clock.
 
+use std::cell::RefCell;
+use std::sync::Arc;
+
 use bevy_ecs::prelude::*;
-use quadsim_components::{Controller, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool};
+use quadsim_components::{
+    ContactForces, Controller, LaneBatching, RobotBatch, RobotSim, SimClock, SimConfig,
+    SimThreadPool,
+};
+use quadsim_engine::batch::{BatchData, LANES, StepParts, step_semi_implicit_batch};
 use quadsim_engine::integrate::{self, Integrator};
 
 /// Advances every compiled robot by one `dt` on the world's thread pool.
 ///
-/// Robots are independent, so each is stepped start to finish by one worker
-/// with its own model, data and workspace: no lock, no allocation, and the
-/// result does not depend on the number of threads.
+/// Consecutive robots of one shared model (see
+/// [`SharedModels`](crate::SharedModels)) are stepped [`LANES`] at a time with
+/// their dynamics in SIMD lanes ([`step_semi_implicit_batch`]); robots the
+/// batch cannot take (RK4, an imposed joint motion, a group of one) are
+/// stepped alone with [`step_robot`]. Each group is stepped start to finish
+/// by one worker with its own data and workspaces: no lock, no allocation
+/// after the first steps. The batched step is bit-identical to the scalar
+/// one, so the result depends neither on the grouping nor on the number of
+/// threads.
 pub fn step_robots(
     mut batch: ResMut<RobotBatch>,
     pool: Res<SimThreadPool>,
     config: Res<SimConfig>,
+    batching: Option<Res<LaneBatching>>,
+    mut ends: Local<Vec<usize>>,
 ) {
     let (dt_s, integrator) = (config.dt_s, config.integrator);
+    let lanes = integrator == Integrator::SemiImplicitEuler && batching.is_none_or(|b| b.0);
     let sims = &mut batch.sims;
-    pool.for_each(sims, |sim| step_robot(sim, dt_s, integrator));
+    plan_groups(sims, lanes, &mut ends);
+    pool.for_each_group(sims, &ends, |group| {
+        if group.len() > 1 {
+            step_in_lanes(group, dt_s);
+        } else {
+            for sim in group {
+                step_robot(sim, dt_s, integrator);
+            }
+        }
+    });
+}
+
+/// Whether a robot can be stepped in SIMD lanes (with semi-implicit Euler):
+/// hybrid dynamics (an imposed joint motion) has no batched form.
+fn lane_ready(sim: &RobotSim) -> bool {
+    sim.workspace.imposed.is_none()
+}
+
+/// Splits `sims` into groups (written as exclusive `ends`): runs of up to
+/// [`LANES`] consecutive lane-ready robots of one model when `lanes`, every
+/// other robot alone.
+pub fn plan_groups(sims: &[RobotSim], lanes: bool, ends: &mut Vec<usize>) {
+    ends.clear();
+    let mut start = 0;
+    for (i, sim) in sims.iter().enumerate().skip(1) {
+        let first = &sims[start];
+        let joins = lanes
+            && i - start < LANES
+            && lane_ready(first)
+            && lane_ready(sim)
+            && Arc::ptr_eq(&first.model, &sim.model);
+        if !joins {
+            ends.push(i);
+            start = i;
+        }
+    }
+    if !sims.is_empty() {
+        ends.push(sims.len());
+    }
+}
+
+thread_local! {
+    /// Each worker's lane workspaces, one per model size met (sizes are all a
+    /// [`BatchData`] depends on), kept between steps so nothing is allocated
+    /// once every size has been seen.
+    static LANE_WORKSPACES: RefCell<Vec<BatchData<LANES>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// One robot's buffers for the batched step.
+fn step_parts(sim: &mut RobotSim) -> StepParts<'_, ContactForces> {
+    StepParts {
+        data: &mut sim.data,
+        ws: &mut sim.workspace,
+        state: &mut sim.state,
+        tau_actuator: &sim.tau_actuator,
+        forces: &mut sim.contact,
+    }
+}
+
+/// Steps 2..=[`LANES`] lane-ready robots of one model with semi-implicit Euler,
+/// their dynamics in SIMD lanes; each ends exactly as [`step_robot`] leaves it.
+fn step_in_lanes(group: &mut [RobotSim], dt_s: f64) {
+    for sim in group.iter_mut() {
+        set_servo_targets(sim);
+    }
+    let model = Arc::clone(&group[0].model);
+    LANE_WORKSPACES.with(|cell| {
+        let mut spaces = cell.borrow_mut();
+        let fits = |bd: &BatchData<LANES>| {
+            bd.q.len() == model.nq && bd.v.len() == model.nv && bd.pose.len() == model.nbodies
+        };
+        let k = match spaces.iter().position(fits) {
+            Some(k) => k,
+            None => {
+                spaces.push(BatchData::new(&model));
+                spaces.len() - 1
+            }
+        };
+        step_semi_implicit_batch(&model, &mut spaces[k], group, step_parts, dt_s);
+    });
+    let worker = rayon::current_thread_index();
+    for sim in group {
+        sim.last_worker = worker;
+    }
+}
+
+/// Servos track the controller's joint targets.
+fn set_servo_targets(sim: &mut RobotSim) {
+    if let Some(bank) = &mut sim.workspace.actuators
+        && bank.has_servos()
+        && let Some(targets) = sim.run.controller.joint_targets()
+    {
+        bank.set_targets(targets);
+    }
 }
 
 /// One robot's step: the engine's integrator with the robot's actuator command
 /// and its contact force model; records the worker that ran it.
 pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
+    set_servo_targets(sim);
     let RobotSim {
         model,
         data,
@@ -33,13 +143,6 @@ pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
         run,
         ..
     } = sim;
-    // Servos track the controller's joint targets.
-    if let Some(bank) = &mut workspace.actuators
-        && bank.has_servos()
-        && let Some(targets) = run.controller.joint_targets()
-    {
-        bank.set_targets(targets);
-    }
     integrate::step(
         model,
         data,

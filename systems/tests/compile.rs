@@ -214,3 +214,63 @@ fn gravity_edit_recompiles_every_robot() {
         );
     }
 }
+
+/// Robots of one articulation share one `Arc<Model>` whatever their names
+/// (so the step can batch them); a different articulation, or an edit that
+/// makes one, gets its own model; the robot's own name stays on its entity.
+#[test]
+fn robots_of_one_articulation_share_one_model() {
+    let mut sim = Simulation::new(SimConfig::default(), 1).unwrap();
+    let quad16 = quadsim_engine::robots::builtin("quad16").unwrap();
+    let mut roots = Vec::new();
+    for name in ["a", "b", "c"] {
+        let mut d = quad16.clone();
+        d.name = name.to_string();
+        roots.push(sim.spawn_robot(&d).unwrap());
+    }
+    let other = sim.spawn_robot(&pendulum()).unwrap();
+    let model = |sim: &Simulation, e: Entity| sim.robot(e).unwrap().model.clone();
+    let a = model(&sim, roots[0]);
+    assert!(Arc::ptr_eq(&a, &model(&sim, roots[1])));
+    assert!(Arc::ptr_eq(&a, &model(&sim, roots[2])));
+    assert!(!Arc::ptr_eq(&a, &model(&sim, other)));
+    assert_eq!(
+        sim.world.resource::<quadsim_systems::SharedModels>().len(),
+        2
+    );
+    for (root, name) in roots.iter().zip(["a", "b", "c"]) {
+        assert_eq!(
+            sim.world
+                .get::<quadsim_components::Robot>(*root)
+                .unwrap()
+                .name,
+            name
+        );
+    }
+    // Editing one robot's torso mass gives it its own model; the others keep theirs.
+    let torso = {
+        let mut q = sim
+            .world
+            .query::<(Entity, &Link, &quadsim_components::BelongsTo)>();
+        q.iter(&sim.world)
+            .find(|(_, l, b)| l.name == "torso" && b.0 == roots[1])
+            .unwrap()
+            .0
+    };
+    let mass_kg = sim.world.get::<Mass>(torso).unwrap().0;
+    sim.world.get_mut::<Mass>(torso).unwrap().0 = mass_kg + 1.0;
+    sim.compile();
+    let b = model(&sim, roots[1]);
+    assert!(!Arc::ptr_eq(&a, &b));
+    assert_eq!(b.total_mass, a.total_mass + 1.0);
+    assert!(Arc::ptr_eq(&a, &model(&sim, roots[2])));
+    drop(b);
+    // Setting it back shares the first model again.
+    sim.world.get_mut::<Mass>(torso).unwrap().0 = mass_kg;
+    sim.compile();
+    assert!(Arc::ptr_eq(&a, &model(&sim, roots[1])));
+    assert_eq!(
+        sim.world.resource::<quadsim_systems::SharedModels>().len(),
+        2
+    );
+}

@@ -199,6 +199,32 @@ impl<const L: usize> BatchData<L> {
         self.pose.len() == model.nbodies && self.q.len() == model.nq && self.v.len() == model.nv
     }
 
+    /// The reverse of [`BatchData::kinematics_into`]: fills lane `lane`'s
+    /// `origin`, `pose`, `vel`, `s` and `inertia_ref` from a `data` whose
+    /// kinematics hold for that lane's `(q, v)` (see [`crate::Data::kinematics_hold`]),
+    /// so that [`aba_from_kinematics_batch`] can run without recomputing them.
+    /// Since the batched kinematics equal the scalar ones bit for bit, the
+    /// lane ends as [`forward_kinematics_batch`] would leave it.
+    pub fn kinematics_from(&mut self, lane: usize, model: &Model, data: &crate::Data) {
+        let set_mat = |m: &mut lanes::LMat3<L>, v: glam::DMat3| {
+            m.x_axis.set_lane(lane, v.x_axis);
+            m.y_axis.set_lane(lane, v.y_axis);
+            m.z_axis.set_lane(lane, v.z_axis);
+        };
+        self.origin.set_lane(lane, data.origin);
+        for i in 0..model.nbodies {
+            let (p, ri) = (&data.pose[i], &data.inertia_ref[i]);
+            set_mat(&mut self.pose[i].rot, p.rot);
+            self.pose[i].trans.set_lane(lane, p.trans);
+            self.vel[i].set_lane(lane, data.vel[i]);
+            self.s[i].set_lane(lane, data.s[i]);
+            let li = &mut self.inertia_ref[i];
+            li.mass.0[lane] = ri.mass;
+            li.com.set_lane(lane, ri.com);
+            set_mat(&mut li.inertia_com, ri.inertia_com);
+        }
+    }
+
     /// Copies lane `lane`'s kinematics (after [`forward_kinematics_batch`] on
     /// `(q, v)`, which must be that lane's state) into a scalar `data`:
     /// `origin`, `pose`, `s`, `s_base`, `inertia_ref`, `vel`, and marks them

@@ -4,7 +4,10 @@
 //!
 //! It repeats [`crate::integrate::step`] with [`Integrator::SemiImplicitEuler`](crate::integrate::Integrator)
 //! stage for stage: (1) forward kinematics (batched) copied into each robot's
-//! `Data`; (2) `τ = sat(τ_actuator) + τ_passive`; (3) the robot's
+//! `Data`, or, when every robot's `Data` already holds them for its state,
+//! copied from there into the lanes; (2) `τ = sat(τ_actuator) + τ_passive` (with an
+//! [`ActuatorBank`](crate::actuator_model::ActuatorBank): its step start, then
+//! each motor's torque in its envelope plus friction); (3) the robot's
 //! [`ForceModel`] on its own `Data`; (4) ABA with the external forces
 //! (batched); (5) `v⁺ = v + dt·a`, `q⁺ = q ⊕ dt·v⁺`. Since the batched
 //! kinematics and ABA are bit-identical to the scalar ones, each robot ends
@@ -23,7 +26,7 @@ use crate::passive::{add_passive_torques, saturate};
 pub struct StepParts<'a, F> {
     /// Its kinematics/dynamics workspace.
     pub data: &'a mut Data,
-    /// Its integrator buffers and passive joint model (no imposed motion).
+    /// Its integrator buffers, passive joint model and actuator models (no imposed motion).
     pub ws: &'a mut StepWorkspace,
     /// Its state, advanced in place.
     pub state: &'a mut State,
@@ -60,10 +63,40 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
             p.ws.imposed.is_none(),
             "an imposed joint motion cannot be stepped in a batch"
         );
-        saturate(model, &p.ws.passive, p.tau_actuator, &mut p.ws.tau_actuator);
+        let StepWorkspace {
+            passive,
+            tau_actuator,
+            actuators,
+            ..
+        } = p.ws;
+        match actuators {
+            Some(bank) => bank.begin_step(
+                model,
+                passive,
+                &p.state.q,
+                &p.state.v,
+                p.tau_actuator,
+                dt_s,
+                tau_actuator,
+            ),
+            None => saturate(model, passive, p.tau_actuator, tau_actuator),
+        }
         bd.set_state(k, &p.state.q, &p.state.v);
     }
-    forward_kinematics_batch(model, bd);
+    // The kinematics at the step's start state are usually in every robot's
+    // `Data` already (the caller observed the robots there): reuse them.
+    let mut held = true;
+    for robot in robots.iter_mut() {
+        let p = parts(robot);
+        held &= p.data.kinematics_hold(model, &p.state.q, &p.state.v);
+    }
+    if held {
+        for (k, robot) in robots.iter_mut().enumerate() {
+            bd.kinematics_from(k, model, parts(robot).data);
+        }
+    } else {
+        forward_kinematics_batch(model, bd);
+    }
     for (k, robot) in robots.iter_mut().enumerate() {
         let StepParts {
             data,
@@ -73,9 +106,14 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
             ..
         } = parts(robot);
         let (q, v) = (&state.q[..], &state.v[..]);
-        bd.kinematics_into(k, model, data, q, v);
+        if !held {
+            bd.kinematics_into(k, model, data, q, v);
+        }
         data.clear_external_forces();
         ws.tau.copy_from_slice(&ws.tau_actuator);
+        if let Some(bank) = &ws.actuators {
+            bank.apply(model, &ws.passive, v, &mut ws.tau);
+        }
         add_passive_torques(model, &ws.passive, q, v, &mut ws.tau);
         forces.apply(model, data, q, v, &mut ws.tau);
         bd.set_tau(k, &ws.tau);

@@ -38,6 +38,11 @@ pub struct ContactSensors {
 }
 
 impl ContactSensors {
+    /// Whether a call at `t_s` would take a sample (see [`super::RateGate::due`]).
+    pub fn due(&self, t_s: f64) -> bool {
+        self.gate.due(t_s)
+    }
+
     /// Sensors on `n_feet` feet, all off; noise from the robot seed `seed`.
     pub fn new(params: ContactSensorParams, n_feet: usize, seed: u64, t0_s: f64) -> ContactSensors {
         let mut rng = sensor_rng(seed, SensorStream::Contacts);

@@ -74,6 +74,11 @@ pub struct Encoders {
 }
 
 impl Encoders {
+    /// Whether a call at `t_s` would take a sample (see [`super::RateGate::due`]).
+    pub fn due(&self, t_s: f64) -> bool {
+        self.gate.due(t_s)
+    }
+
     /// Encoders for `n_joints` joints; noise from the robot seed `seed`.
     pub fn new(params: EncoderParams, n_joints: usize, seed: u64, t0_s: f64) -> Encoders {
         let mut rng = sensor_rng(seed, SensorStream::Encoders);

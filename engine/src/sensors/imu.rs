@@ -69,6 +69,11 @@ pub struct Imu {
 }
 
 impl Imu {
+    /// Whether a call at `t_s` would take a sample (see [`super::RateGate::due`]).
+    pub fn due(&self, t_s: f64) -> bool {
+        self.gate.due(t_s)
+    }
+
     /// An IMU whose noise draws come from the robot seed `seed`, first sample at `t0_s`.
     pub fn new(params: ImuParams, seed: u64, t0_s: f64) -> Imu {
         let mut rng = sensor_rng(seed, SensorStream::Imu);

@@ -57,6 +57,11 @@ pub struct Mocap {
 }
 
 impl Mocap {
+    /// Whether a call at `t_s` would take a sample (see [`super::RateGate::due`]).
+    pub fn due(&self, t_s: f64) -> bool {
+        self.gate.due(t_s)
+    }
+
     /// Mocap with noise from the robot seed `seed`, first capture at `t0_s`.
     pub fn new(params: MocapParams, seed: u64, t0_s: f64) -> Mocap {
         Mocap {

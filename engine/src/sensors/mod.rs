@@ -28,7 +28,7 @@ pub use encoders::{EncoderParams, Encoders, JointVelocityMode};
 pub use imu::{Imu, ImuParams, ImuSample};
 pub use mocap::{Mocap, MocapParams, MocapSample};
 pub use noise::{NoiseChannel, NoiseParams};
-pub use suite::{SensorConfig, SensorSuite, SensorTruth};
+pub use suite::{SensorConfig, SensorSuite, SensorTruth, SensorUpdates};
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -90,6 +90,16 @@ impl RateGate {
 
     fn next_t_s(&self) -> f64 {
         self.t0_s + self.next as f64 * self.period_s
+    }
+
+    /// Whether [`RateGate::tick`] at `t_s` would sample (it does not advance).
+    #[expect(
+        clippy::neg_cmp_op_on_partial_ord,
+        reason = "exactly the negation of tick's test, NaN included"
+    )]
+    pub fn due(&self, t_s: f64) -> bool {
+        let eps = 1e-6 * self.period_s.max(1e-6);
+        !(t_s + eps < self.next_t_s())
     }
 
     /// Whether a sample is due at `t_s`; if so, returns the time since the

@@ -194,6 +194,16 @@ impl SensorSuite {
         }
     }
 
+    /// Whether some sensor takes a sample at `t_s`. When none does,
+    /// [`SensorSuite::update`] changes nothing and returns no update, so a
+    /// caller may skip it and the truth it needs.
+    pub fn any_due(&self, t_s: f64) -> bool {
+        self.imu.as_ref().is_some_and(|s| s.due(t_s))
+            || self.encoders.as_ref().is_some_and(|s| s.due(t_s))
+            || self.contacts.as_ref().is_some_and(|s| s.due(t_s))
+            || self.mocap.as_ref().is_some_and(|s| s.due(t_s))
+    }
+
     /// Call at every simulation step with the truth at that instant.
     pub fn update(&mut self, truth: &SensorTruth<'_>) -> SensorUpdates {
         let rot = DMat3::from_quat(truth.orientation);
