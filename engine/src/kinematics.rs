@@ -161,15 +161,16 @@ fn rigid_inertia_in(inertia: &RigidInertia, step: PoseStep, x: &Transform) -> Ri
 /// `rot · R_k(angle)`, where `R_k` turns about the k-th unit axis: only the
 /// two columns across the axis change (12 products instead of 27, and no
 /// axis–angle matrix).
-#[inline]
+/// One arm per axis, so that no column is picked by a run-time index.
+#[inline(always)]
 fn rotate_about_axis(rot: DMat3, k: usize, angle: f64) -> DMat3 {
     let (s, c) = angle.sin_cos();
-    let cols = [rot.x_axis, rot.y_axis, rot.z_axis];
-    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-    let mut out = cols;
-    out[a] = cols[a] * c + cols[b] * s;
-    out[b] = cols[b] * c - cols[a] * s;
-    DMat3::from_cols(out[0], out[1], out[2])
+    let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
+    match k {
+        0 => DMat3::from_cols(x, y * c + z * s, z * c - y * s),
+        1 => DMat3::from_cols(x * c - z * s, y, z * c + x * s),
+        _ => DMat3::from_cols(x * c + y * s, y * c - x * s, z),
+    }
 }
 
 /// Poses and velocities: [`forward_kinematics_pos`] plus `vel` (reference frame).

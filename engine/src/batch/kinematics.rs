@@ -74,12 +74,12 @@ fn axis_angle<const L: usize>(axis: DVec3, angle: Lanes<L>) -> LMat3<L> {
 #[inline(always)]
 fn rotate_about_axis<const L: usize>(rot: LMat3<L>, k: usize, angle: Lanes<L>) -> LMat3<L> {
     let (s, c) = angle.sin_cos();
-    let cols = [rot.x_axis, rot.y_axis, rot.z_axis];
-    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-    let mut out = cols;
-    out[a] = cols[a] * c + cols[b] * s;
-    out[b] = cols[b] * c - cols[a] * s;
-    LMat3::from_cols(out[0], out[1], out[2])
+    let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
+    match k {
+        0 => LMat3::from_cols(x, y * c + z * s, z * c - y * s),
+        1 => LMat3::from_cols(x * c - z * s, y, z * c + x * s),
+        _ => LMat3::from_cols(x * c + y * s, y * c - x * s, z),
+    }
 }
 
 /// The joint's own motion at `qi` in the joint frame (the scalar `joint_transform`).
