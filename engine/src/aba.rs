@@ -69,7 +69,7 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
     // Pass 2: articulated inertias, leaves to root. The downdated inertia
     // Iᴬ − U Uᵀ/D is added to the parent block by block, never stored whole
     // (a 6×6 does not fit the registers), and Iᴬ_a c = Iᴬ c − U (Uᵀc)/D.
-    for i in (1..n).rev() {
+    for &i in model.depth_order.iter().rev() {
         let iv = idx_v[i];
         let p = parent[i];
         let s = s_all[i];
@@ -111,7 +111,7 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
         _ => -a_grav,
     };
     data.acc[0] = a0;
-    for i in 1..model.nbodies {
+    for &i in &model.depth_order {
         let iv = model.idx_v[i];
         let a = data.acc[model.parent[i]] + data.c[i];
         let qdd =

@@ -100,7 +100,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let s_all = &mut data.s[..n];
     let inertia_ref = &mut data.inertia_ref[..n];
     let vel = &mut data.vel[..n];
-    for i in 1..n {
+    for &i in &model.depth_order {
         let p = parent[i];
         let jt = joint_type[i];
         let st = step[i];

@@ -195,6 +195,13 @@ pub struct Model {
     /// from `joint_type`, `axis`, `placement` and `inertia` when the model is
     /// compiled (nbodies).
     pub pose_step: Vec<PoseStep>,
+    /// Bodies 1.. ordered by depth in the tree, then by index (nbodies − 1):
+    /// parents come before children, and consecutive bodies are mostly on
+    /// different branches (the legs), so the CPU can overlap their
+    /// dependency chains. Walked backwards it visits the children of any
+    /// body in decreasing index, as `(1..n).rev()` does, so sums over
+    /// children keep their order.
+    pub depth_order: Vec<usize>,
 }
 
 /// The shortcuts of forward kinematics for one body, decided once per model
@@ -330,6 +337,7 @@ impl Model {
             springs: Vec::new(),
             load_nv: 0,
             pose_step: Vec::new(),
+            depth_order: Vec::new(),
         };
 
         // Movable joints take q/v slots in document order, whatever the body order.
@@ -479,6 +487,12 @@ impl Model {
             }
         }
         m.pose_step = (0..m.nbodies).map(|i| PoseStep::of(&m, i)).collect();
+        let mut depth = vec![0usize; m.nbodies];
+        for i in 1..m.nbodies {
+            depth[i] = depth[m.parent[i]] + 1;
+        }
+        m.depth_order = (1..m.nbodies).collect();
+        m.depth_order.sort_by_key(|&i| (depth[i], i));
         Ok(m)
     }
 

@@ -125,7 +125,7 @@ fn poses<const L: usize>(model: &Model, bd: &mut BatchData<L>) {
     let s_all = &mut bd.s[..n];
     let inertia_ref = &mut bd.inertia_ref[..n];
     let vel = &mut bd.vel[..n];
-    for i in 1..n {
+    for &i in &model.depth_order {
         let p = parent[i];
         let jt = joint_type[i];
         let st = step[i];
