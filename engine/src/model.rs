@@ -659,3 +659,53 @@ fn validate(desc: &RobotDescription) -> Result<(), ModelError> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn builtin(name: &str) -> Model {
+        let d = crate::robots::builtin(name).expect("built-in robot");
+        Model::from_description(&d, BaseKind::Floating).expect("compiles")
+    }
+
+    /// Every body once, parents first; walked backwards, the children of a
+    /// body come in decreasing index (as `(1..n).rev()`), so ABA's sums over
+    /// children keep their order.
+    #[test]
+    fn depth_order_puts_parents_first_and_keeps_sibling_order() {
+        for name in ["quad16", "quad12"] {
+            let m = builtin(name);
+            let mut seen = vec![false; m.nbodies];
+            seen[0] = true;
+            for &i in &m.depth_order {
+                assert!(seen[m.parent[i]] && !seen[i], "{name}: body {i}");
+                seen[i] = true;
+            }
+            assert!(seen.iter().all(|&s| s), "{name}");
+            for p in 0..m.nbodies {
+                let kids: Vec<usize> = (m.depth_order.iter().rev().copied())
+                    .filter(|&i| m.parent[i] == p)
+                    .collect();
+                assert!(kids.windows(2).all(|w| w[0] > w[1]), "{name}: {kids:?}");
+            }
+            // the four legs' bodies alternate: consecutive bodies on different legs
+            let hips: Vec<usize> = m.depth_order[..4].to_vec();
+            assert!(hips.iter().all(|&i| m.parent[i] == 0), "{name}: {hips:?}");
+        }
+    }
+
+    /// quad16's shortcuts: every joint an aligned revolute, every placement
+    /// a pure translation, diagonal inertias, and the four massless hip links.
+    #[test]
+    fn quad16_pose_steps() {
+        let m = builtin("quad16");
+        let steps = &m.pose_step[1..];
+        assert!(steps.iter().all(|s| s.aligned_axis.is_some() && !s.placement_rotates));
+        assert!(m.pose_step.iter().all(|s| s.inertia_diagonal));
+        assert_eq!(m.pose_step.iter().filter(|s| s.massless).count(), 4);
+        for (i, s) in m.pose_step.iter().enumerate() {
+            assert_eq!(s.massless, m.inertia[i].mass == 0.0, "body {i}");
+        }
+    }
+}
