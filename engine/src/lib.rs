@@ -47,6 +47,7 @@ pub mod sensors;
 pub mod spatial;
 pub mod support;
 pub mod terrain;
+pub mod trig;
 
 pub use data::Data;
 pub use model::{BaseKind, Model, ModelError};

@@ -701,11 +701,7 @@ mod tests {
     fn quad16_pose_steps() {
         let m = builtin("quad16");
         let steps = &m.pose_step[1..];
-        assert!(
-            steps
-                .iter()
-                .all(|s| s.aligned_axis.is_some() && !s.placement_rotates)
-        );
+        assert!(steps.iter().all(|s| s.aligned_axis.is_some() && !s.placement_rotates));
         assert!(m.pose_step.iter().all(|s| s.inertia_diagonal));
         assert_eq!(m.pose_step.iter().filter(|s| s.massless).count(), 4);
         for (i, s) in m.pose_step.iter().enumerate() {
