@@ -794,43 +794,6 @@ mod tests {
     }
 
     #[test]
-    fn diagonal_inertia_shortcut_matches_full_rotation() {
-        let ri = RigidInertia::new(
-            1.7,
-            DVec3::new(0.1, -0.2, 0.3),
-            DMat3::from_diagonal(DVec3::new(0.02, 0.05, 0.03)),
-        );
-        let x = Transform::from_xyz_rpy(DVec3::new(0.3, -1.0, 2.0), DVec3::new(0.2, 0.4, -1.2));
-        let (a, b) = (ri.transformed(&x), ri.transformed_diagonal(&x));
-        assert_eq!(a.mass, b.mass);
-        assert!(approx(a.com, b.com));
-        let d = (a.inertia_com - b.inertia_com).to_cols_array();
-        assert!(d.iter().all(|e| e.abs() < 1e-16), "{d:?}");
-        // exactly symmetric
-        assert_eq!(b.inertia_com, b.inertia_com.transpose());
-    }
-
-    #[test]
-    fn symmetric_blocks_multiply_as_full_matrices() {
-        let a = DMat3::from_cols(
-            DVec3::new(2.0, 0.3, -0.1),
-            DVec3::new(0.3, 1.5, 0.2),
-            DVec3::new(-0.1, 0.2, 0.9),
-        );
-        let s = SymMat3::upper_of(&a);
-        assert_eq!(s.to_mat3(), a);
-        let v = DVec3::new(0.7, -1.1, 0.4);
-        assert!(approx(s.mul_vec3(v), a * v));
-        let (p, q) = (DVec3::new(1.0, 2.0, 3.0), DVec3::new(-0.5, 0.25, 4.0));
-        let o = SymMat3::outer(p, q).to_mat3();
-        let full = outer(p, q);
-        // the upper triangle and diagonal of p qᵀ
-        for (r, c) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)] {
-            assert_eq!(o.col(c)[r], full.col(c)[r]);
-        }
-    }
-
-    #[test]
     fn sym6_solve_rejects_indefinite() {
         // a rigid inertia with a negative principal moment is not positive definite
         let ri = RigidInertia::new(
