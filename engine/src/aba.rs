@@ -5,7 +5,7 @@
 use crate::data::Data;
 use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
-use crate::spatial::{Force, Motion, Sym6, SymMat3, outer};
+use crate::spatial::{Force, Motion, SymMat3, outer};
 use glam::DVec3;
 use multiversion::multiversion;
 
@@ -45,7 +45,6 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
     // Slices of known length up front, so that the loops below index
     // without bounds checks (the body arrays all have `n` entries).
     let (parent, idx_v, armature) = (&model.parent[..n], &model.idx_v[..n], &model.armature[..nv]);
-    let step = &model.pose_step[..n];
     let (v, tau) = (&v[..nv], &tau[..nv]);
     let inertia_ref = &data.inertia_ref[..n];
     let vel = &data.vel[..n];
@@ -69,19 +68,14 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
     for i in 0..n {
         let inertia = &inertia_ref[i];
         let vi = vel[i];
+        ia_all[i] = inertia.to_sym6();
         let a_bias = if i > 0 {
             c_all[parent[i]] + vi.cross(s_all[i] * v[idx_v[i]])
         } else {
             c_all[0]
         };
         c_all[i] = a_bias;
-        let mut p = if step[i].massless {
-            ia_all[i] = Sym6::ZERO;
-            Force::ZERO
-        } else {
-            ia_all[i] = inertia.to_sym6();
-            inertia.mul_motion(a_bias) + vi.cross_force(inertia.mul_motion(vi))
-        };
+        let mut p = inertia.mul_motion(a_bias) + vi.cross_force(inertia.mul_motion(vi));
         if use_external {
             p -= f_ext[i];
         }

@@ -220,10 +220,6 @@ pub struct PoseStep {
     /// into the world frame needs no full 3×3 product
     /// ([`RigidInertia::transformed_diagonal`]).
     pub inertia_diagonal: bool,
-    /// The body has no mass and no rotational inertia (a massless link
-    /// between two joints): it adds nothing to articulated inertias or bias
-    /// forces, and ABA skips forming them.
-    pub massless: bool,
 }
 
 impl PoseStep {
@@ -231,7 +227,6 @@ impl PoseStep {
     pub fn of(m: &Model, i: usize) -> PoseStep {
         let pl = &m.placement[i];
         let ic = m.inertia[i].inertia_com;
-        let massless = m.inertia[i].mass == 0.0 && ic == DMat3::ZERO;
         let aligned_axis = match m.joint_type[i] {
             JointType::Revolute => aligned_axis(m.axis[i]),
             _ => None,
@@ -246,7 +241,6 @@ impl PoseStep {
                 && ic.y_axis.z == 0.0
                 && ic.z_axis.x == 0.0
                 && ic.z_axis.y == 0.0,
-            massless,
         }
     }
 }

@@ -5,7 +5,7 @@
 use super::BatchData;
 use super::kinematics::forward_kinematics_lanes;
 use super::lanes::{LVec3, Lanes, outer};
-use super::spatial::{LForce, LMotion, LSym6, LSymMat3};
+use super::spatial::{LMotion, LSymMat3};
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion};
 use glam::DVec3;
@@ -76,7 +76,6 @@ fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external:
     let floating = model.joint_type[0] == JointType::Free;
     let a_grav = LMotion::new(LVec3::splat(model.gravity), LVec3::ZERO);
     let (parent, idx_v, armature) = (&model.parent[..n], &model.idx_v[..n], &model.armature[..nv]);
-    let step = &model.pose_step[..n];
     let (v, tau) = (&bd.v[..nv], &bd.tau[..nv]);
     let inertia_ref = &bd.inertia_ref[..n];
     let vel = &bd.vel[..n];
@@ -95,19 +94,14 @@ fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external:
     for i in 0..n {
         let inertia = &inertia_ref[i];
         let vi = vel[i];
+        ia_all[i] = inertia.to_sym6();
         let a_bias = if i > 0 {
             c_all[parent[i]] + vi.cross(s_all[i] * v[idx_v[i]])
         } else {
             c_all[0]
         };
         c_all[i] = a_bias;
-        let mut p = if step[i].massless {
-            ia_all[i] = LSym6::default();
-            LForce::ZERO
-        } else {
-            ia_all[i] = inertia.to_sym6();
-            inertia.mul_motion(a_bias) + vi.cross_force(inertia.mul_motion(vi))
-        };
+        let mut p = inertia.mul_motion(a_bias) + vi.cross_force(inertia.mul_motion(vi));
         if use_external {
             p -= f_ext[i];
         }
