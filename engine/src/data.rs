@@ -25,12 +25,6 @@ pub struct Data {
     pub s_base: [Motion; 6],
     /// Each body's rigid inertia in the reference frame (CoM relative to `origin`) (nbodies).
     pub inertia_ref: Vec<RigidInertia>,
-    /// Scratch of forward kinematics: each axis-aligned revolute joint's
-    /// signed angle (rad) and its sine and cosine, in one vectorised pass
-    /// (nbodies; zero elsewhere).
-    pub(crate) joint_angle: Vec<f64>,
-    pub(crate) joint_sin: Vec<f64>,
-    pub(crate) joint_cos: Vec<f64>,
 
     // --- dynamics (rnea / aba / crba) ---
     /// Spatial acceleration of each body, reference frame (nbodies).
@@ -102,9 +96,6 @@ impl Data {
             s: vec![Motion::ZERO; nb],
             s_base: [Motion::ZERO; 6],
             inertia_ref: vec![RigidInertia::ZERO; nb],
-            joint_angle: vec![0.0; nb],
-            joint_sin: vec![0.0; nb],
-            joint_cos: vec![0.0; nb],
             acc: vec![Motion::ZERO; nb],
             f: vec![Force::ZERO; nb],
             f_ext: vec![Force::ZERO; nb],

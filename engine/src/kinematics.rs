@@ -4,7 +4,6 @@
 use crate::data::Data;
 use crate::model::{JointType, Model, PoseStep};
 use crate::spatial::{Motion, RigidInertia, Transform};
-use crate::trig;
 use glam::{DMat3, DQuat, DVec3};
 use multiversion::multiversion;
 
@@ -87,21 +86,6 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
         }
     }
     let step = &model.pose_step[..n];
-    // The aligned joints' sines and cosines first, all in one loop that
-    // compiles to SIMD instructions (crate::trig), instead of one libm call
-    // per joint inside the dependent chain of poses.
-    let (idx_q, angle) = (&model.idx_q[..n], &mut data.joint_angle[..n]);
-    for i in 1..n {
-        if let Some((_, sign)) = step[i].aligned_axis {
-            angle[i] = sign * q[idx_q[i]];
-        }
-    }
-    trig::sin_cos_slice(
-        &data.joint_angle[..n],
-        &mut data.joint_sin[..n],
-        &mut data.joint_cos[..n],
-    );
-    let (joint_sin, joint_cos) = (&data.joint_sin[..n], &data.joint_cos[..n]);
     let base_rot = Transform::new(base.rot, DVec3::ZERO);
     data.inertia_ref[0] = rigid_inertia_in(&model.inertia[0], step[0], &base_rot);
     if let Some(v) = v {
@@ -109,7 +93,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     }
     // Slices of known length up front, so that the loop indexes without
     // bounds checks (the body arrays all have `n` entries, `parent[i] < i`).
-    let (parent, idx_v) = (&model.parent[..n], &model.idx_v[..n]);
+    let (parent, idx_q, idx_v) = (&model.parent[..n], &model.idx_q[..n], &model.idx_v[..n]);
     let (joint_type, axis_all) = (&model.joint_type[..n], &model.axis[..n]);
     let (placement, inertia) = (&model.placement[..n], &model.inertia[..n]);
     let pose = &mut data.pose[..n];
@@ -134,25 +118,19 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
         } else {
             xp.trans
         };
+        let qi = q[idx_q[i]];
         // World axis: a joint's own motion leaves its axis fixed, so it is
         // the joint frame's axis.
         let (x, aw) = match st.aligned_axis {
             Some((k, sign)) => {
                 let col = rot_j.col(k);
                 (
-                    Transform::new(
-                        rotate_about_axis(rot_j, k, joint_sin[i], joint_cos[i]),
-                        trans_j,
-                    ),
+                    Transform::new(rotate_about_axis(rot_j, k, sign * qi), trans_j),
                     if sign > 0.0 { col } else { -col },
                 )
             }
             None => (
-                Transform::new(rot_j, trans_j).compose(&joint_transform(
-                    jt,
-                    axis_all[i],
-                    q[idx_q[i]],
-                )),
+                Transform::new(rot_j, trans_j).compose(&joint_transform(jt, axis_all[i], qi)),
                 rot_j * axis_all[i],
             ),
         };
@@ -183,10 +161,10 @@ fn rigid_inertia_in(inertia: &RigidInertia, step: PoseStep, x: &Transform) -> Ri
 /// `rot · R_k(angle)`, where `R_k` turns about the k-th unit axis: only the
 /// two columns across the axis change (12 products instead of 27, and no
 /// axis–angle matrix).
-/// One arm per axis, so that no column is picked by a run-time index; `s`
-/// and `c` are the angle's sine and cosine.
+/// One arm per axis, so that no column is picked by a run-time index.
 #[inline(always)]
-fn rotate_about_axis(rot: DMat3, k: usize, s: f64, c: f64) -> DMat3 {
+fn rotate_about_axis(rot: DMat3, k: usize, angle: f64) -> DMat3 {
+    let (s, c) = angle.sin_cos();
     let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
     match k {
         0 => DMat3::from_cols(x, y * c + z * s, z * c - y * s),
@@ -273,10 +251,7 @@ mod tests {
         for axis in axes {
             for angle in [-2.5, -0.4, 0.0, 0.9, 3.0] {
                 let fast = match aligned_axis(axis) {
-                    Some((k, sign)) => {
-                        let (s, c) = trig::sin_cos(sign * angle);
-                        rotate_about_axis(parent.rot, k, s, c)
-                    }
+                    Some((k, sign)) => rotate_about_axis(parent.rot, k, sign * angle),
                     None => continue,
                 };
                 let slow = parent.rot * DMat3::from_axis_angle(axis, angle);

@@ -47,7 +47,6 @@ pub mod sensors;
 pub mod spatial;
 pub mod support;
 pub mod terrain;
-pub mod trig;
 
 pub use data::Data;
 pub use model::{BaseKind, Model, ModelError};

@@ -73,7 +73,7 @@ fn axis_angle<const L: usize>(axis: DVec3, angle: Lanes<L>) -> LMat3<L> {
 /// `rot · R_k(angle)` as in the scalar fast path: only the two columns across axis `k` change.
 #[inline(always)]
 fn rotate_about_axis<const L: usize>(rot: LMat3<L>, k: usize, angle: Lanes<L>) -> LMat3<L> {
-    let (s, c) = angle.sin_cos_joint();
+    let (s, c) = angle.sin_cos();
     let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
     match k {
         0 => LMat3::from_cols(x, y * c + z * s, z * c - y * s),

@@ -42,16 +42,6 @@ impl<const L: usize> Lanes<L> {
         Self(out)
     }
 
-    /// Sine and cosine per lane by [`crate::trig::sin_cos`], as the scalar
-    /// kinematics takes them for axis-aligned joints: branch-free, so the
-    /// lanes go through SIMD instructions together.
-    #[inline(always)]
-    pub fn sin_cos_joint(self) -> (Self, Self) {
-        let (mut s, mut c) = ([0.0; L], [0.0; L]);
-        crate::trig::sin_cos_slice(&self.0, &mut s, &mut c);
-        (Self(s), Self(c))
-    }
-
     /// Sine and cosine per lane, by the same `f64::sin_cos` call as the scalar path.
     #[inline(always)]
     pub fn sin_cos(self) -> (Self, Self) {
