@@ -38,10 +38,6 @@ pub fn aba_from_kinematics(
 fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_external: bool) {
     let n = model.nbodies;
     let nv = model.nv;
-    let floating = model.joint_type[0] == JointType::Free;
-    // Gravity is a fictitious upward acceleration of the base; true
-    // accelerations are the computed ones plus `a_grav`.
-    let a_grav = Motion::new(model.gravity, DVec3::ZERO);
     // Slices of known length up front, so that the loops below index
     // without bounds checks (the body arrays all have `n` entries).
     let (parent, idx_v, armature) = (&model.parent[..n], &model.idx_v[..n], &model.armature[..nv]);
@@ -56,89 +52,82 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
     let u_all = &mut data.u[..n];
     let d_inv_all = &mut data.d_inv[..n];
     let u_tau_all = &mut data.u_tau[..n];
-    let acc = &mut data.acc[..n];
-    // Pass 1, root to leaves: bias accelerations and bias forces. With every
-    // q̈ zero, body i would accelerate by āᵢ = ā_parent + vᵢ ×ₘ Sᵢ q̇ᵢ (from
-    // rest for a floating base, from the fictitious upward gravity for a
-    // fixed one), under the force pᵢ = Iᵢ āᵢ + vᵢ ×* Iᵢ vᵢ (RNEA's bias).
-    // Writing aᵢ = āᵢ + δᵢ, the velocity products then live in p alone, and
-    // the backward pass needs no Iᴬ c product (Featherstone 2008, Table 7.1
-    // with c folded into p; the fixed-frame transforms are identities).
-    c_all[0] = if floating { Motion::ZERO } else { -a_grav };
+    // Pass 1: bias forces and velocity-product accelerations.
     for i in 0..n {
         let inertia = &inertia_ref[i];
         let vi = vel[i];
         ia_all[i] = inertia.to_sym6();
-        let a_bias = if i > 0 {
-            c_all[parent[i]] + vi.cross(s_all[i] * v[idx_v[i]])
-        } else {
-            c_all[0]
-        };
-        c_all[i] = a_bias;
-        let mut p = inertia.mul_motion(a_bias) + vi.cross_force(inertia.mul_motion(vi));
+        let mut p = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
             p -= f_ext[i];
         }
         pa_all[i] = p;
+        if i > 0 {
+            c_all[i] = vi.cross(s_all[i] * v[idx_v[i]]);
+        }
     }
-    // Pass 2: articulated inertias and biases, leaves to root. The downdated
-    // inertia Iᴬ − U Uᵀ/D is added to the parent block by block, never
-    // stored whole (a 6×6 does not fit the registers).
+    // Pass 2: articulated inertias, leaves to root. The downdated inertia
+    // Iᴬ − U Uᵀ/D is added to the parent block by block, never stored whole
+    // (a 6×6 does not fit the registers), and Iᴬ_a c = Iᴬ c − U (Uᵀc)/D.
     for &i in model.depth_order.iter().rev() {
         let iv = idx_v[i];
         let p = parent[i];
         let s = s_all[i];
+        let c = c_all[i];
         let ia = ia_all[i];
         let u = ia.mul_motion(s);
         let d_inv = 1.0 / (s.dot(u) + armature[iv]);
         let pai = pa_all[i];
         let ut = tau[iv] - s.dot(pai);
+        let ia_c = ia.mul_motion(c);
         let ul = u.lin * d_inv;
         let ua = u.ang * d_inv;
         let parent = &mut ia_all[p];
         parent.m += ia.m - SymMat3::outer(ul, u.lin);
         parent.h += ia.h - outer(ua, u.lin);
         parent.i += ia.i - SymMat3::outer(ua, u.ang);
-        let pa = pai + u * (ut * d_inv);
+        let pa = pai + ia_c + u * ((ut - c.dot(u)) * d_inv);
         u_all[i] = u;
         d_inv_all[i] = d_inv;
         u_tau_all[i] = ut;
         pa_all[p] += pa;
     }
-    // Pass 3: δ (the accelerations beyond the bias ones) and q̈, root to leaves.
-    let d0 = if floating {
-        let r = data.pose[0].rot;
-        let applied = Force::new(
-            r * DVec3::new(tau[0], tau[1], tau[2]),
-            r * DVec3::new(tau[3], tau[4], tau[5]),
-        );
-        let rhs = applied - pa_all[0];
-        match ia_all[0].solve(rhs) {
-            Some(a) => a,
-            None => Motion::new(DVec3::NAN, DVec3::NAN),
+    // Pass 3: accelerations, root to leaves. Gravity is a fictitious upward
+    // acceleration of the base; true accelerations are a' + a_grav.
+    let a_grav = Motion::new(model.gravity, DVec3::ZERO);
+    let a0 = match model.joint_type[0] {
+        JointType::Free => {
+            let r = data.pose[0].rot;
+            let applied = Force::new(
+                r * DVec3::new(tau[0], tau[1], tau[2]),
+                r * DVec3::new(tau[3], tau[4], tau[5]),
+            );
+            let rhs = applied - data.pa[0];
+            match data.ia[0].solve(rhs) {
+                Some(a) => a,
+                None => Motion::new(DVec3::NAN, DVec3::NAN),
+            }
         }
-    } else {
-        Motion::ZERO
+        _ => -a_grav,
     };
-    acc[0] = d0;
+    data.acc[0] = a0;
     for &i in &model.depth_order {
-        let iv = idx_v[i];
-        let a = acc[parent[i]];
-        let u = u_all[i];
-        let qdd = (u_tau_all[i] - u.lin.dot(a.lin) - u.ang.dot(a.ang)) * d_inv_all[i];
+        let iv = model.idx_v[i];
+        let a = data.acc[model.parent[i]] + data.c[i];
+        let qdd =
+            (data.u_tau[i] - data.u[i].lin.dot(a.lin) - data.u[i].ang.dot(a.ang)) * data.d_inv[i];
         data.ddq[iv] = qdd;
-        acc[i] = a + s_all[i] * qdd;
+        data.acc[i] = a + data.s[i] * qdd;
     }
-    if floating {
-        // ā₀ = 0: the base's fictitious acceleration is δ₀
+    if model.joint_type[0] == JointType::Free {
         let rt = data.pose[0].rot.transpose();
-        let a0_true = d0 + a_grav;
+        let a0_true = a0 + a_grav;
         let al = rt * a0_true.lin;
         let aa = rt * a0_true.ang;
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
-    // Leave `acc` as true spatial accelerations for callers: ā + δ + a_grav.
-    for i in 0..n {
-        acc[i] = acc[i] + c_all[i] + a_grav;
+    // Leave `acc` as true spatial accelerations for callers.
+    for i in 0..model.nbodies {
+        data.acc[i] += a_grav;
     }
 }

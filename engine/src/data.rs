@@ -44,9 +44,7 @@ pub struct Data {
     pub d_inv: Vec<f64>,
     /// `u = τ − Sᵀ pᴬ` (ABA) (nbodies).
     pub u_tau: Vec<f64>,
-    /// Bias acceleration (ABA): `āᵢ = ā_parent + vᵢ ×ₘ Sᵢ q̇ᵢ`, body i's
-    /// acceleration were every q̈ zero, from rest for a floating base and from
-    /// the fictitious upward gravity for a fixed one (nbodies).
+    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (nbodies).
     pub c: Vec<Motion>,
 
     // --- outputs ---

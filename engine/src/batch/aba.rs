@@ -73,8 +73,6 @@ fn aba_dispatch<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_extern
 fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external: bool) {
     let n = model.nbodies;
     let nv = model.nv;
-    let floating = model.joint_type[0] == JointType::Free;
-    let a_grav = LMotion::new(LVec3::splat(model.gravity), LVec3::ZERO);
     let (parent, idx_v, armature) = (&model.parent[..n], &model.idx_v[..n], &model.armature[..nv]);
     let (v, tau) = (&bd.v[..nv], &bd.tau[..nv]);
     let inertia_ref = &bd.inertia_ref[..n];
@@ -87,91 +85,89 @@ fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external:
     let u_all = &mut bd.u[..n];
     let d_inv_all = &mut bd.d_inv[..n];
     let u_tau_all = &mut bd.u_tau[..n];
-    let acc = &mut bd.acc[..n];
-    // Pass 1, root to leaves: bias accelerations ā and bias forces
-    // p = I ā + v ×* I v (see the scalar `aba_passes`).
-    c_all[0] = if floating { LMotion::ZERO } else { -a_grav };
+    // Pass 1: bias forces and velocity-product accelerations.
     for i in 0..n {
         let inertia = &inertia_ref[i];
         let vi = vel[i];
         ia_all[i] = inertia.to_sym6();
-        let a_bias = if i > 0 {
-            c_all[parent[i]] + vi.cross(s_all[i] * v[idx_v[i]])
-        } else {
-            c_all[0]
-        };
-        c_all[i] = a_bias;
-        let mut p = inertia.mul_motion(a_bias) + vi.cross_force(inertia.mul_motion(vi));
+        let mut p = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
             p -= f_ext[i];
         }
         pa_all[i] = p;
+        if i > 0 {
+            c_all[i] = vi.cross(s_all[i] * v[idx_v[i]]);
+        }
     }
-    // Pass 2: articulated inertias and biases, leaves to root.
+    // Pass 2: articulated inertias, leaves to root.
     let one = Lanes::splat(1.0);
     for &i in model.depth_order.iter().rev() {
         let iv = idx_v[i];
         let p = parent[i];
         let s = s_all[i];
+        let c = c_all[i];
         let ia = ia_all[i];
         let u = ia.mul_motion(s);
         let d_inv = one / (s.dot(u) + Lanes::splat(armature[iv]));
         let pai = pa_all[i];
         let ut = tau[iv] - s.dot(pai);
+        let ia_c = ia.mul_motion(c);
         let ul = u.lin * d_inv;
         let ua = u.ang * d_inv;
         let parent = &mut ia_all[p];
         parent.m += ia.m - LSymMat3::outer(ul, u.lin);
         parent.h += ia.h - outer(ua, u.lin);
         parent.i += ia.i - LSymMat3::outer(ua, u.ang);
-        let pa = pai + u * (ut * d_inv);
+        let pa = pai + ia_c + u * ((ut - c.dot(u)) * d_inv);
         u_all[i] = u;
         d_inv_all[i] = d_inv;
         u_tau_all[i] = ut;
         pa_all[p] += pa;
     }
-    // Pass 3: δ and q̈, root to leaves.
-    let d0 = if floating {
-        // The 6×6 solve branches on positive definiteness: the scalar
-        // `Sym6::solve`, lane by lane (once per robot, not per body).
-        let mut d0 = LMotion::ZERO;
-        let rot = bd.pose[0].rot;
-        for k in 0..bd.active {
-            let r = rot.lane(k);
-            let t = |j: usize| tau[j].0[k];
-            let applied = Force::new(
-                r * DVec3::new(t(0), t(1), t(2)),
-                r * DVec3::new(t(3), t(4), t(5)),
-            );
-            let rhs = applied - pa_all[0].lane(k);
-            let a = ia_all[0]
-                .lane(k)
-                .solve(rhs)
-                .unwrap_or(Motion::new(DVec3::NAN, DVec3::NAN));
-            d0.set_lane(k, a);
+    // Pass 3: accelerations, root to leaves; gravity as a fictitious upward
+    // acceleration of the base.
+    let a_grav = LMotion::new(LVec3::splat(model.gravity), LVec3::ZERO);
+    let a0 = match model.joint_type[0] {
+        JointType::Free => {
+            // The 6×6 solve branches on positive definiteness: the scalar
+            // `Sym6::solve`, lane by lane (once per robot, not per body).
+            let mut a0 = LMotion::ZERO;
+            let rot = bd.pose[0].rot;
+            for k in 0..bd.active {
+                let r = rot.lane(k);
+                let t = |j: usize| tau[j].0[k];
+                let applied = Force::new(
+                    r * DVec3::new(t(0), t(1), t(2)),
+                    r * DVec3::new(t(3), t(4), t(5)),
+                );
+                let rhs = applied - bd.pa[0].lane(k);
+                let a = bd.ia[0]
+                    .lane(k)
+                    .solve(rhs)
+                    .unwrap_or(Motion::new(DVec3::NAN, DVec3::NAN));
+                a0.set_lane(k, a);
+            }
+            a0
         }
-        d0
-    } else {
-        LMotion::ZERO
+        _ => -a_grav,
     };
-    acc[0] = d0;
+    bd.acc[0] = a0;
     for &i in &model.depth_order {
         let iv = idx_v[i];
-        let a = acc[parent[i]];
-        let u = u_all[i];
-        let qdd = (u_tau_all[i] - u.lin.dot(a.lin) - u.ang.dot(a.ang)) * d_inv_all[i];
+        let a = bd.acc[parent[i]] + bd.c[i];
+        let u = bd.u[i];
+        let qdd = (bd.u_tau[i] - u.lin.dot(a.lin) - u.ang.dot(a.ang)) * bd.d_inv[i];
         bd.ddq[iv] = qdd;
-        acc[i] = a + s_all[i] * qdd;
+        bd.acc[i] = a + bd.s[i] * qdd;
     }
-    if floating {
+    if model.joint_type[0] == JointType::Free {
         let rt = bd.pose[0].rot.transpose();
-        let a0_true = d0 + a_grav;
+        let a0_true = a0 + a_grav;
         let al = rt * a0_true.lin;
         let aa = rt * a0_true.ang;
         bd.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
-    // True spatial accelerations: ā + δ + a_grav.
-    for i in 0..n {
-        acc[i] = acc[i] + c_all[i] + a_grav;
+    for acc in &mut bd.acc[..n] {
+        *acc += a_grav;
     }
 }

@@ -90,7 +90,7 @@ pub struct BatchData<const L: usize = LANES> {
     pub d_inv: Vec<Lanes<L>>,
     /// `u = τ − Sᵀ pᴬ` (nbodies).
     pub u_tau: Vec<Lanes<L>>,
-    /// Bias acceleration `ā` (as [`crate::Data::c`]) (nbodies).
+    /// Velocity-product acceleration (nbodies).
     pub c: Vec<LMotion<L>>,
     /// Spatial acceleration of each body (true, gravity included), reference frame (nbodies).
     pub acc: Vec<LMotion<L>>,
