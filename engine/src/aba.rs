@@ -5,7 +5,7 @@
 use crate::data::Data;
 use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
-use crate::spatial::{Force, Motion, SymMat3, outer};
+use crate::spatial::{Force, Motion, outer};
 use glam::DVec3;
 use multiversion::multiversion;
 
@@ -83,9 +83,9 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
         let ul = u.lin * d_inv;
         let ua = u.ang * d_inv;
         let parent = &mut ia_all[p];
-        parent.m += ia.m - SymMat3::outer(ul, u.lin);
+        parent.m += ia.m - outer(ul, u.lin);
         parent.h += ia.h - outer(ua, u.lin);
-        parent.i += ia.i - SymMat3::outer(ua, u.ang);
+        parent.i += ia.i - outer(ua, u.ang);
         let pa = pai + ia_c + u * ((ut - c.dot(u)) * d_inv);
         u_all[i] = u;
         d_inv_all[i] = d_inv;

@@ -481,15 +481,10 @@ impl RigidInertia {
         // i = I_c − m [c]×[c]× = I_c + m (|c|² 1 − c cᵀ), without a 3×3 product.
         let c = self.com;
         let mc = c * self.mass;
-        // Only the upper triangle of the symmetric blocks is read and formed.
-        let ic = SymMat3::upper_of(&self.inertia_com);
         Sym6 {
-            m: SymMat3::from_diagonal(DVec3::splat(self.mass)),
+            m: DMat3::from_diagonal(DVec3::splat(self.mass)),
             h: skew(mc),
-            i: SymMat3 {
-                diag: ic.diag + DVec3::splat(mc.dot(c)) - mc * c,
-                off: ic.off - SymMat3::outer(mc, c).off,
-            },
+            i: self.inertia_com + DMat3::from_diagonal(DVec3::splat(mc.dot(c))) - outer(mc, c),
         }
     }
 
@@ -511,119 +506,16 @@ impl RigidInertia {
     }
 }
 
-/// A symmetric 3×3 matrix by its six distinct entries: half the loads,
-/// stores and updates of a full matrix, and exactly symmetric by construction.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SymMat3 {
-    /// Diagonal `(xx, yy, zz)`.
-    pub diag: DVec3,
-    /// Upper off-diagonal `(xy, xz, yz)`.
-    pub off: DVec3,
-}
-
-impl SymMat3 {
-    /// The zero matrix.
-    pub const ZERO: Self = Self {
-        diag: DVec3::ZERO,
-        off: DVec3::ZERO,
-    };
-
-    /// A diagonal matrix.
-    #[inline]
-    pub const fn from_diagonal(d: DVec3) -> Self {
-        Self {
-            diag: d,
-            off: DVec3::ZERO,
-        }
-    }
-
-    /// The upper triangle of `a` (its lower triangle is ignored).
-    #[inline]
-    pub fn upper_of(a: &DMat3) -> Self {
-        Self {
-            diag: DVec3::new(a.x_axis.x, a.y_axis.y, a.z_axis.z),
-            off: DVec3::new(a.y_axis.x, a.z_axis.x, a.z_axis.y),
-        }
-    }
-
-    /// The upper triangle of the outer product `a bᵀ` (entries `aⱼ bₖ`, `j ≤ k`).
-    #[inline]
-    pub fn outer(a: DVec3, b: DVec3) -> Self {
-        Self {
-            diag: a * b,
-            off: DVec3::new(a.x, a.x, a.y) * DVec3::new(b.y, b.z, b.z),
-        }
-    }
-
-    /// The full matrix.
-    #[inline]
-    pub fn to_mat3(&self) -> DMat3 {
-        let (d, o) = (self.diag, self.off);
-        DMat3::from_cols(
-            DVec3::new(d.x, o.x, o.y),
-            DVec3::new(o.x, d.y, o.z),
-            DVec3::new(o.y, o.z, d.z),
-        )
-    }
-
-    /// `self · v`: row j is `dⱼ vⱼ + …`, diagonal term first.
-    #[inline]
-    pub fn mul_vec3(&self, v: DVec3) -> DVec3 {
-        let (d, o) = (self.diag, self.off);
-        d * v
-            + DVec3::new(o.x, o.x, o.y) * DVec3::new(v.y, v.x, v.x)
-            + DVec3::new(o.y, o.z, o.z) * DVec3::new(v.z, v.z, v.y)
-    }
-}
-
-impl Add for SymMat3 {
-    type Output = SymMat3;
-    #[inline]
-    fn add(self, o: SymMat3) -> SymMat3 {
-        SymMat3 {
-            diag: self.diag + o.diag,
-            off: self.off + o.off,
-        }
-    }
-}
-
-impl Sub for SymMat3 {
-    type Output = SymMat3;
-    #[inline]
-    fn sub(self, o: SymMat3) -> SymMat3 {
-        SymMat3 {
-            diag: self.diag - o.diag,
-            off: self.off - o.off,
-        }
-    }
-}
-
-impl AddAssign for SymMat3 {
-    #[inline]
-    fn add_assign(&mut self, o: SymMat3) {
-        self.diag += o.diag;
-        self.off += o.off;
-    }
-}
-
-impl SubAssign for SymMat3 {
-    #[inline]
-    fn sub_assign(&mut self, o: SymMat3) {
-        self.diag -= o.diag;
-        self.off -= o.off;
-    }
-}
-
 /// A symmetric 6×6 spatial inertia (rigid or articulated) about a reference point, in blocks:
 /// `[f; n] = [[m, hᵀ], [h, i]] · [v; ω]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sym6 {
     /// Linear–linear block (kg), symmetric.
-    pub m: SymMat3,
+    pub m: DMat3,
     /// Angular–linear coupling block (kg·m).
     pub h: DMat3,
     /// Angular–angular block (kg·m²), symmetric.
-    pub i: SymMat3,
+    pub i: DMat3,
 }
 
 impl Default for Sym6 {
@@ -635,9 +527,9 @@ impl Default for Sym6 {
 impl Sym6 {
     /// The zero matrix.
     pub const ZERO: Self = Self {
-        m: SymMat3::ZERO,
+        m: DMat3::ZERO,
         h: DMat3::ZERO,
-        i: SymMat3::ZERO,
+        i: DMat3::ZERO,
     };
 
     /// `I · v`.
@@ -650,8 +542,8 @@ impl Sym6 {
             self.h.z_axis.dot(v.ang),
         );
         Force {
-            lin: self.m.mul_vec3(v.lin) + ht_w,
-            ang: self.h * v.lin + self.i.mul_vec3(v.ang),
+            lin: self.m * v.lin + ht_w,
+            ang: self.h * v.lin + self.i * v.ang,
         }
     }
 
@@ -660,22 +552,21 @@ impl Sym6 {
     pub fn sub_outer(&mut self, u: Force, inv_d: f64) {
         let ul = u.lin * inv_d;
         let ua = u.ang * inv_d;
-        self.m -= SymMat3::outer(ul, u.lin);
+        self.m -= outer(ul, u.lin);
         self.h -= outer(ua, u.lin);
-        self.i -= SymMat3::outer(ua, u.ang);
+        self.i -= outer(ua, u.ang);
     }
 
     /// Dense row-major 6×6 matrix.
     pub fn to_dense(&self) -> [[f64; 6]; 6] {
         let mut out = [[0.0; 6]; 6];
         let ht = self.h.transpose();
-        let (m, i) = (self.m.to_mat3(), self.i.to_mat3());
         for r in 0..3 {
             for c in 0..3 {
-                out[r][c] = m.col(c)[r];
+                out[r][c] = self.m.col(c)[r];
                 out[r][c + 3] = ht.col(c)[r];
                 out[r + 3][c] = self.h.col(c)[r];
-                out[r + 3][c + 3] = i.col(c)[r];
+                out[r + 3][c + 3] = self.i.col(c)[r];
             }
         }
         out
@@ -690,9 +581,9 @@ impl Sym6 {
         // criterion on each). Two 3×3 inverses and no square roots: a much
         // shorter dependency chain than a 6×6 Cholesky, on the path of every
         // floating-base ABA call.
-        let m_inv = spd_inverse(self.m.to_mat3())?;
+        let m_inv = spd_inverse(self.m)?;
         let b = self.h * m_inv;
-        let schur = self.i.to_mat3() - b * self.h.transpose();
+        let schur = self.i - b * self.h.transpose();
         let s_inv = spd_inverse(schur)?;
         let ang = s_inv * (f.ang - b * f.lin);
         let lin = m_inv * (f.lin - self.h.transpose() * ang);

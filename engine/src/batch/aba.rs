@@ -5,7 +5,7 @@
 use super::BatchData;
 use super::kinematics::forward_kinematics_lanes;
 use super::lanes::{LVec3, Lanes, outer};
-use super::spatial::{LMotion, LSymMat3};
+use super::spatial::LMotion;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion};
 use glam::DVec3;
@@ -115,9 +115,9 @@ fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external:
         let ul = u.lin * d_inv;
         let ua = u.ang * d_inv;
         let parent = &mut ia_all[p];
-        parent.m += ia.m - LSymMat3::outer(ul, u.lin);
+        parent.m += ia.m - outer(ul, u.lin);
         parent.h += ia.h - outer(ua, u.lin);
-        parent.i += ia.i - LSymMat3::outer(ua, u.ang);
+        parent.i += ia.i - outer(ua, u.ang);
         let pa = pai + ia_c + u * ((ut - c.dot(u)) * d_inv);
         u_all[i] = u;
         d_inv_all[i] = d_inv;

@@ -180,14 +180,6 @@ impl<const L: usize> Neg for LVec3<L> {
         Self::new(-self.x, -self.y, -self.z)
     }
 }
-/// glam's `DVec3 * DVec3`: componentwise products.
-impl<const L: usize> Mul for LVec3<L> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        Self::new(self.x * o.x, self.y * o.y, self.z * o.z)
-    }
-}
 /// Each lane's vector times that lane's scalar.
 impl<const L: usize> Mul<Lanes<L>> for LVec3<L> {
     type Output = Self;

@@ -3,8 +3,8 @@
 //! in the same order of operations) as the scalar types, so that every lane
 //! is bit-identical to the scalar result.
 
-use super::lanes::{LMat3, LVec3, Lanes, skew};
-use crate::spatial::{Force, Motion, RigidInertia, Sym6, SymMat3, Transform};
+use super::lanes::{LMat3, LVec3, Lanes, outer, skew};
+use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
 /// A spatial motion `[v; ω]` per lane ([`Motion`]).
@@ -258,15 +258,11 @@ impl<const L: usize> LInertia<L> {
     pub fn to_sym6(&self) -> LSym6<L> {
         let c = self.com;
         let mc = c * self.mass;
-        let ic = LSymMat3::upper_of(&self.inertia_com);
-        let mcc = mc.dot(c);
         LSym6 {
-            m: LSymMat3::from_diagonal(LVec3::new(self.mass, self.mass, self.mass)),
+            m: LMat3::from_diagonal(LVec3::new(self.mass, self.mass, self.mass)),
             h: skew(mc),
-            i: LSymMat3 {
-                diag: ic.diag + LVec3::new(mcc, mcc, mcc) - mc * c,
-                off: ic.off - LSymMat3::outer(mc, c).off,
-            },
+            i: self.inertia_com + LMat3::from_diagonal(LVec3::new(mc.dot(c), mc.dot(c), mc.dot(c)))
+                - outer(mc, c),
         }
     }
 
@@ -281,101 +277,15 @@ impl<const L: usize> LInertia<L> {
     }
 }
 
-/// A symmetric 3×3 matrix per lane by its six distinct entries ([`SymMat3`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct LSymMat3<const L: usize> {
-    /// Diagonal `(xx, yy, zz)`.
-    pub diag: LVec3<L>,
-    /// Upper off-diagonal `(xy, xz, yz)`.
-    pub off: LVec3<L>,
-}
-
-impl<const L: usize> LSymMat3<L> {
-    /// [`SymMat3::from_diagonal`].
-    #[inline(always)]
-    pub fn from_diagonal(d: LVec3<L>) -> Self {
-        Self {
-            diag: d,
-            off: LVec3::ZERO,
-        }
-    }
-
-    /// [`SymMat3::upper_of`].
-    #[inline(always)]
-    pub fn upper_of(a: &LMat3<L>) -> Self {
-        Self {
-            diag: LVec3::new(a.x_axis.x, a.y_axis.y, a.z_axis.z),
-            off: LVec3::new(a.y_axis.x, a.z_axis.x, a.z_axis.y),
-        }
-    }
-
-    /// [`SymMat3::outer`].
-    #[inline(always)]
-    pub fn outer(a: LVec3<L>, b: LVec3<L>) -> Self {
-        Self {
-            diag: a * b,
-            off: LVec3::new(a.x, a.x, a.y) * LVec3::new(b.y, b.z, b.z),
-        }
-    }
-
-    /// [`SymMat3::mul_vec3`].
-    #[inline(always)]
-    pub fn mul_vec3(&self, v: LVec3<L>) -> LVec3<L> {
-        let (d, o) = (self.diag, self.off);
-        d * v
-            + LVec3::new(o.x, o.x, o.y) * LVec3::new(v.y, v.x, v.x)
-            + LVec3::new(o.y, o.z, o.z) * LVec3::new(v.z, v.z, v.y)
-    }
-
-    /// Lane `k` as a scalar symmetric matrix.
-    #[inline(always)]
-    pub fn lane(&self, k: usize) -> SymMat3 {
-        SymMat3 {
-            diag: self.diag.lane(k),
-            off: self.off.lane(k),
-        }
-    }
-}
-
-impl<const L: usize> Add for LSymMat3<L> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Self {
-            diag: self.diag + o.diag,
-            off: self.off + o.off,
-        }
-    }
-}
-
-impl<const L: usize> Sub for LSymMat3<L> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Self {
-            diag: self.diag - o.diag,
-            off: self.off - o.off,
-        }
-    }
-}
-
-impl<const L: usize> AddAssign for LSymMat3<L> {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Self) {
-        self.diag += o.diag;
-        self.off += o.off;
-    }
-}
-
 /// A symmetric 6×6 spatial inertia per lane, in blocks ([`Sym6`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct LSym6<const L: usize> {
-    /// Linear–linear block (kg), symmetric.
-    pub m: LSymMat3<L>,
+    /// Linear–linear block (kg).
+    pub m: LMat3<L>,
     /// Angular–linear block (kg·m).
     pub h: LMat3<L>,
-    /// Angular–angular block (kg·m²), symmetric.
-    pub i: LSymMat3<L>,
+    /// Angular–angular block (kg·m²).
+    pub i: LMat3<L>,
 }
 
 impl<const L: usize> LSym6<L> {
@@ -398,8 +308,8 @@ impl<const L: usize> LSym6<L> {
             self.h.z_axis.dot(v.ang),
         );
         LForce {
-            lin: self.m.mul_vec3(v.lin) + ht_w,
-            ang: self.h * v.lin + self.i.mul_vec3(v.ang),
+            lin: self.m * v.lin + ht_w,
+            ang: self.h * v.lin + self.i * v.ang,
         }
     }
 }
