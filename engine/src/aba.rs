@@ -7,6 +7,7 @@ use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion, outer};
 use glam::DVec3;
+use multiversion::multiversion;
 
 /// Forward dynamics without external forces. Fills and returns `data.ddq` (nv).
 /// For a floating base, `ddq[0..6]` is the base's spatial acceleration in the
@@ -27,6 +28,14 @@ pub fn aba_from_kinematics(
     tau: &[f64],
     use_external: bool,
 ) {
+    aba_passes(model, data, v, tau, use_external);
+}
+
+/// The three passes of [`aba_from_kinematics`], compiled for x86-64-v3 (AVX2,
+/// FMA) and the generic target with the CPU's choice at the first call; the
+/// results are the same bits either way (nothing is fused into an FMA).
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_external: bool) {
     let n = model.nbodies;
     let nv = model.nv;
     // Slices of known length up front, so that the loops below index
@@ -60,7 +69,7 @@ pub fn aba_from_kinematics(
     // Pass 2: articulated inertias, leaves to root. The downdated inertia
     // Iᴬ − U Uᵀ/D is added to the parent block by block, never stored whole
     // (a 6×6 does not fit the registers), and Iᴬ_a c = Iᴬ c − U (Uᵀc)/D.
-    for i in (1..n).rev() {
+    for &i in model.depth_order.iter().rev() {
         let iv = idx_v[i];
         let p = parent[i];
         let s = s_all[i];
@@ -102,7 +111,7 @@ pub fn aba_from_kinematics(
         _ => -a_grav,
     };
     data.acc[0] = a0;
-    for i in 1..model.nbodies {
+    for &i in &model.depth_order {
         let iv = model.idx_v[i];
         let a = data.acc[model.parent[i]] + data.c[i];
         let qdd =

@@ -15,7 +15,7 @@
 
 use crate::description::{JointKind, RobotDescription};
 use crate::spatial::{RigidInertia, Transform};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use thiserror::Error;
 
 /// Marker for the base's parent.
@@ -194,6 +194,69 @@ pub struct Model {
     /// the last `load_nv` bodies) that belong to compliant payloads: sprung,
     /// unactuated, not addressed by controllers (see [`Model::actuated_nv`]).
     pub load_nv: usize,
+    /// Which shortcuts forward kinematics may take for each body, derived
+    /// from `joint_type`, `axis`, `placement` and `inertia` when the model is
+    /// compiled (nbodies).
+    pub pose_step: Vec<PoseStep>,
+    /// Bodies 1.. ordered by depth in the tree, then by index (nbodies − 1):
+    /// parents come before children, and consecutive bodies are mostly on
+    /// different branches (the legs), so the CPU can overlap their
+    /// dependency chains. Walked backwards it visits the children of any
+    /// body in decreasing index, as `(1..n).rev()` does, so sums over
+    /// children keep their order.
+    pub depth_order: Vec<usize>,
+}
+
+/// The shortcuts of forward kinematics for one body, decided once per model
+/// rather than tested on every call. Each is exact: the shortcut skips only
+/// products with exact zeros and ones.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PoseStep {
+    /// The placement's rotation is not exactly the identity (else its product is skipped).
+    pub placement_rotates: bool,
+    /// The placement's translation is not exactly zero (else its product is skipped).
+    pub placement_translates: bool,
+    /// A revolute joint about exactly ±(the k-th unit axis): `Some((k, ±1.0))`;
+    /// its rotation then changes two columns of the joint frame (no axis–angle matrix).
+    pub aligned_axis: Option<(usize, f64)>,
+    /// The inertia about the CoM is diagonal in the body frame, so turning it
+    /// into the world frame needs no full 3×3 product
+    /// ([`RigidInertia::transformed_diagonal`]).
+    pub inertia_diagonal: bool,
+}
+
+impl PoseStep {
+    /// The shortcuts for body `i` of `m`.
+    pub fn of(m: &Model, i: usize) -> PoseStep {
+        let pl = &m.placement[i];
+        let ic = m.inertia[i].inertia_com;
+        let aligned_axis = match m.joint_type[i] {
+            JointType::Revolute => aligned_axis(m.axis[i]),
+            _ => None,
+        };
+        PoseStep {
+            placement_rotates: pl.rot != DMat3::IDENTITY,
+            placement_translates: pl.trans != DVec3::ZERO,
+            aligned_axis,
+            inertia_diagonal: ic.x_axis.y == 0.0
+                && ic.x_axis.z == 0.0
+                && ic.y_axis.x == 0.0
+                && ic.y_axis.z == 0.0
+                && ic.z_axis.x == 0.0
+                && ic.z_axis.y == 0.0,
+        }
+    }
+}
+
+/// `Some((k, ±1))` when `axis` is ±(the k-th unit vector) exactly.
+#[inline]
+pub fn aligned_axis(axis: DVec3) -> Option<(usize, f64)> {
+    match (axis.x == 0.0, axis.y == 0.0, axis.z == 0.0) {
+        (false, true, true) => Some((0, axis.x.signum())),
+        (true, false, true) => Some((1, axis.y.signum())),
+        (true, true, false) => Some((2, axis.z.signum())),
+        _ => None,
+    }
 }
 
 /// A linear spring–damper on one joint coordinate, at rest at q = 0:
@@ -276,6 +339,8 @@ impl Model {
             total_mass: 0.0,
             springs: Vec::new(),
             load_nv: 0,
+            pose_step: Vec::new(),
+            depth_order: Vec::new(),
         };
 
         // Movable joints take q/v slots in document order, whatever the body order.
@@ -424,6 +489,13 @@ impl Model {
                 });
             }
         }
+        m.pose_step = (0..m.nbodies).map(|i| PoseStep::of(&m, i)).collect();
+        let mut depth = vec![0usize; m.nbodies];
+        for i in 1..m.nbodies {
+            depth[i] = depth[m.parent[i]] + 1;
+        }
+        m.depth_order = (1..m.nbodies).collect();
+        m.depth_order.sort_by_key(|&i| (depth[i], i));
         Ok(m)
     }
 

@@ -101,7 +101,7 @@ fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external:
     }
     // Pass 2: articulated inertias, leaves to root.
     let one = Lanes::splat(1.0);
-    for i in (1..n).rev() {
+    for &i in model.depth_order.iter().rev() {
         let iv = idx_v[i];
         let p = parent[i];
         let s = s_all[i];
@@ -152,7 +152,7 @@ fn aba_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>, use_external:
         _ => -a_grav,
     };
     bd.acc[0] = a0;
-    for i in 1..n {
+    for &i in &model.depth_order {
         let iv = idx_v[i];
         let a = bd.acc[parent[i]] + bd.c[i];
         let u = bd.u[i];

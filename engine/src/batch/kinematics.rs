@@ -5,8 +5,8 @@
 use super::BatchData;
 use super::lanes::{LMat3, LVec3, Lanes};
 use super::spatial::{LInertia, LMotion, LTransform};
-use crate::kinematics::aligned_axis;
-use crate::model::{JointType, Model};
+use crate::model::{JointType, Model, PoseStep};
+use crate::spatial::RigidInertia;
 use glam::{DMat3, DVec3};
 use multiversion::multiversion;
 
@@ -33,11 +33,6 @@ fn fk_dispatch<const L: usize>(model: &Model, bd: &mut BatchData<L>) {
 #[inline(always)]
 pub(super) fn forward_kinematics_lanes<const L: usize>(model: &Model, bd: &mut BatchData<L>) {
     poses(model, bd);
-    let n = model.nbodies;
-    bd.vel[0] = base_velocity(model, bd);
-    for i in 1..n {
-        bd.vel[i] = bd.vel[model.parent[i]] + bd.s[i] * bd.v[model.idx_v[i]];
-    }
 }
 
 /// glam's `DMat3::from_quat(DQuat::from_xyzw(q[3], q[4], q[5], q[6]))` per lane.
@@ -79,12 +74,12 @@ fn axis_angle<const L: usize>(axis: DVec3, angle: Lanes<L>) -> LMat3<L> {
 #[inline(always)]
 fn rotate_about_axis<const L: usize>(rot: LMat3<L>, k: usize, angle: Lanes<L>) -> LMat3<L> {
     let (s, c) = angle.sin_cos();
-    let cols = [rot.x_axis, rot.y_axis, rot.z_axis];
-    let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-    let mut out = cols;
-    out[a] = cols[a] * c + cols[b] * s;
-    out[b] = cols[b] * c - cols[a] * s;
-    LMat3::from_cols(out[0], out[1], out[2])
+    let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
+    match k {
+        0 => LMat3::from_cols(x, y * c + z * s, z * c - y * s),
+        1 => LMat3::from_cols(x * c - z * s, y, z * c + x * s),
+        _ => LMat3::from_cols(x * c + y * s, y * c - x * s, z),
+    }
 }
 
 /// The joint's own motion at `qi` in the joint frame (the scalar `joint_transform`).
@@ -114,43 +109,78 @@ fn poses<const L: usize>(model: &Model, bd: &mut BatchData<L>) {
         }
         _ => LTransform::new(LMat3::splat(DMat3::IDENTITY), LVec3::ZERO),
     };
-    bd.origin = base.trans;
+    let n = model.nbodies;
+    let origin = base.trans;
+    bd.origin = origin;
     bd.pose[0] = base;
-    bd.inertia_ref[0] =
-        LInertia::transformed(&model.inertia[0], &LTransform::new(base.rot, LVec3::ZERO));
-    for i in 1..model.nbodies {
-        let p = model.parent[i];
-        let jt = model.joint_type[i];
-        let axis = model.axis[i];
-        let xp = bd.pose[p];
-        let pl = &model.placement[i];
-        let rot_j = if pl.rot == DMat3::IDENTITY {
-            xp.rot
-        } else {
+    let step = &model.pose_step[..n];
+    let base_rot = LTransform::new(base.rot, LVec3::ZERO);
+    bd.inertia_ref[0] = rigid_inertia_in(&model.inertia[0], step[0], &base_rot);
+    bd.vel[0] = base_velocity(model, bd);
+    let (parent, idx_q, idx_v) = (&model.parent[..n], &model.idx_q[..n], &model.idx_v[..n]);
+    let (joint_type, axis_all) = (&model.joint_type[..n], &model.axis[..n]);
+    let (placement, inertia) = (&model.placement[..n], &model.inertia[..n]);
+    let (q, v) = (&bd.q[..], &bd.v[..]);
+    let pose = &mut bd.pose[..n];
+    let s_all = &mut bd.s[..n];
+    let inertia_ref = &mut bd.inertia_ref[..n];
+    let vel = &mut bd.vel[..n];
+    for &i in &model.depth_order {
+        let p = parent[i];
+        let jt = joint_type[i];
+        let st = step[i];
+        let xp = pose[p];
+        let pl = &placement[i];
+        let rot_j = if st.placement_rotates {
             xp.rot * LMat3::splat(pl.rot)
+        } else {
+            xp.rot
         };
-        let trans_j = xp.rot * LVec3::splat(pl.trans) + xp.trans;
-        let qi = bd.q[model.idx_q[i]];
-        let (x, aw) = match (jt, aligned_axis(axis)) {
-            (JointType::Revolute, Some((k, sign))) => (
-                LTransform::new(
-                    rotate_about_axis(rot_j, k, Lanes::splat(sign) * qi),
-                    trans_j,
-                ),
-                rot_j.col(k) * Lanes::splat(sign),
-            ),
-            _ => (
-                LTransform::new(rot_j, trans_j).compose(&joint_transform(jt, axis, qi)),
-                rot_j * LVec3::splat(axis),
+        let trans_j = if st.placement_translates {
+            xp.rot * LVec3::splat(pl.trans) + xp.trans
+        } else {
+            xp.trans
+        };
+        let qi = q[idx_q[i]];
+        let (x, aw) = match st.aligned_axis {
+            Some((k, sign)) => {
+                let col = rot_j.col(k);
+                (
+                    LTransform::new(
+                        rotate_about_axis(rot_j, k, Lanes::splat(sign) * qi),
+                        trans_j,
+                    ),
+                    if sign > 0.0 { col } else { -col },
+                )
+            }
+            None => (
+                LTransform::new(rot_j, trans_j).compose(&joint_transform(jt, axis_all[i], qi)),
+                rot_j * LVec3::splat(axis_all[i]),
             ),
         };
-        bd.pose[i] = x;
-        let r = x.trans - bd.origin;
-        bd.s[i] = match jt {
+        pose[i] = x;
+        let r = x.trans - origin;
+        let s = match jt {
             JointType::Revolute => LMotion::new(r.cross(aw), aw),
             _ => LMotion::new(aw, LVec3::ZERO),
         };
-        bd.inertia_ref[i] = LInertia::transformed(&model.inertia[i], &LTransform::new(x.rot, r));
+        s_all[i] = s;
+        inertia_ref[i] = rigid_inertia_in(&inertia[i], st, &LTransform::new(x.rot, r));
+        vel[i] = vel[p] + s * v[idx_v[i]];
+    }
+}
+
+/// The scalar `rigid_inertia_in`: a body's inertia through `x`, by its shortcut.
+#[inline(always)]
+fn rigid_inertia_in<const L: usize>(
+    inertia: &RigidInertia,
+    step: PoseStep,
+    x: &LTransform<L>,
+) -> LInertia<L> {
+    if crate::kinematics::DIAGONAL_INERTIA_SHORTCUT && step.inertia_diagonal {
+        LInertia::transformed_diagonal(inertia, x)
+    } else {
+        LInertia::transformed(inertia, x)
     }
 }
 

@@ -227,6 +227,32 @@ impl<const L: usize> LInertia<L> {
         }
     }
 
+    /// [`RigidInertia::transformed_diagonal`], one body model seen through each lane's transform.
+    #[inline(always)]
+    pub fn transformed_diagonal(ri: &RigidInertia, x: &LTransform<L>) -> Self {
+        let ic = &ri.inertia_com;
+        let (c0, c1, c2) = (x.rot.x_axis, x.rot.y_axis, x.rot.z_axis);
+        let (e0, e1, e2) = (
+            c0 * Lanes::splat(ic.x_axis.x),
+            c1 * Lanes::splat(ic.y_axis.y),
+            c2 * Lanes::splat(ic.z_axis.z),
+        );
+        let mulc = |a: LVec3<L>, b: LVec3<L>| LVec3::new(a.x * b.x, a.y * b.y, a.z * b.z);
+        let diag = mulc(e0, c0) + mulc(e1, c1) + mulc(e2, c2);
+        let up =
+            |e: LVec3<L>, c: LVec3<L>| mulc(LVec3::new(e.x, e.x, e.y), LVec3::new(c.y, c.z, c.z));
+        let off = up(e0, c0) + up(e1, c1) + up(e2, c2);
+        Self {
+            mass: Lanes::splat(ri.mass),
+            com: x.transform_point(LVec3::splat(ri.com)),
+            inertia_com: LMat3::from_cols(
+                LVec3::new(diag.x, off.x, off.y),
+                LVec3::new(off.x, diag.y, off.z),
+                LVec3::new(off.y, off.z, diag.z),
+            ),
+        }
+    }
+
     /// [`RigidInertia::to_sym6`].
     #[inline(always)]
     pub fn to_sym6(&self) -> LSym6<L> {
