@@ -124,11 +124,7 @@ impl Data {
     /// inertias) hold [`crate::kinematics::forward_kinematics`] at `(q, v)` of
     /// `model`, bit for bit (what its cache checks).
     pub fn kinematics_hold(&self, model: &Model, q: &[f64], v: &[f64]) -> bool {
-        let k = &self.kin;
-        let same = |a: &[f64], b: &[f64]| {
-            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-        };
-        k.level == 2 && k.model == model as *const Model as usize && same(&k.q, q) && same(&k.v, v)
+        crate::kinematics::kinematics_level(model, self, q, Some(v)) == 2
     }
 
     /// Forgets which state the kinematic fields hold (after writing them by hand).

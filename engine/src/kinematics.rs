@@ -44,7 +44,7 @@ pub fn forward_kinematics_pos(model: &Model, data: &mut Data, q: &[f64]) {
 /// velocities, 1 poses only, 0 nothing. States compare bit for bit, so a
 /// skipped call gives exactly what computing again would.
 #[inline]
-fn kinematics_level(model: &Model, data: &Data, q: &[f64], v: Option<&[f64]>) -> u8 {
+pub(crate) fn kinematics_level(model: &Model, data: &Data, q: &[f64], v: Option<&[f64]>) -> u8 {
     let k = &data.kin;
     let same = |a: &[f64], b: &[f64]| {
         a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())

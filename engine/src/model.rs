@@ -534,6 +534,9 @@ impl Model {
             total_mass,
             springs,
             load_nv,
+            // derived from the fields above when the model is compiled
+            pose_step: _,
+            depth_order: _,
         } = self;
         *nq == other.nq
             && *nv == other.nv
