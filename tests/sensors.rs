@@ -237,7 +237,7 @@ fn bad_sensor_keys_name_their_path() {
 fn sensors_are_logged_beside_the_true_state() {
     let src = format!(
         "{TWO}{}{}",
-        robot("a", -0.75, ""),
+        robot("a", -0.75, "[robots.sensors.mocap]\n"),
         robot(
             "b",
             0.75,
@@ -260,7 +260,14 @@ fn sensors_are_logged_beside_the_true_state() {
     assert!(msgs("b", "sensors").is_empty(), "no sensors, no channel");
     assert!(!msgs("b", "joint_states").is_empty());
     let (mut worst_enc, mut sq_height, mut n) = (0.0f64, 0.0, 0.0);
-    for ((s, j), p) in sensed.iter().zip(&states).zip(&poses) {
+    // (the final sample, after the last step, holds the sensors' previous
+    // outputs: see below)
+    for ((s, j), p) in sensed
+        .iter()
+        .zip(&states)
+        .zip(&poses)
+        .take(sensed.len() - 1)
+    {
         let enc = s["encoder_position_rad"].as_array().unwrap();
         let truth = j["position"].as_array().unwrap();
         assert_eq!(enc.len(), truth.len());
@@ -273,6 +280,56 @@ fn sensors_are_logged_beside_the_true_state() {
         n += 1.0;
         assert_eq!(s["contact"].as_array().unwrap().len(), 4);
     }
+    // The contact sensors' forces: the true normal force (the feet channel's)
+    // with quad16's 2 N white noise, within 5 σ; mocap: the true base
+    // position at the capture time (the nearest logged instant, ≤ 1 ms
+    // away at ≤ 0.5 m/s) with its 0.5 mm noise, within 5 mm. The run's
+    // final sample (taken after the last step, whose sensors have not sampled
+    // that instant: they hold their previous outputs) is left out.
+    let feet = msgs("a", "feet");
+    let (mut worst_force, mut forces) = (0.0f64, 0);
+    for (s, f) in sensed.iter().zip(&feet).take(sensed.len() - 1) {
+        let sensed_n = s["contact_force_n"].as_array().unwrap();
+        let true_n: Vec<f64> = f["feet"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x["normal_force_n"].as_f64().unwrap_or(0.0))
+            .collect();
+        assert_eq!(sensed_n.len(), true_n.len());
+        for (a, b) in sensed_n.iter().zip(&true_n) {
+            worst_force = worst_force.max((a.as_f64().unwrap() - b).abs());
+            forces += 1;
+        }
+    }
+    assert!(
+        forces > 0 && worst_force < 10.0,
+        "contact force error {worst_force} N"
+    );
+    let t_ns =
+        |v: &Value| v["seconds"].as_f64().unwrap_or(0.0) * 1e9 + v["nanos"].as_f64().unwrap_or(0.0);
+    let (mut worst_mocap, mut captures) = (0.0f64, 0);
+    for s in &sensed {
+        let Some(m) = s.get("mocap").filter(|m| !m.is_null()) else {
+            continue;
+        };
+        let tc = t_ns(&m["captured"]);
+        let p = poses
+            .iter()
+            .min_by(|a, b| {
+                (t_ns(&a["timestamp"]) - tc)
+                    .abs()
+                    .total_cmp(&(t_ns(&b["timestamp"]) - tc).abs())
+            })
+            .unwrap();
+        for k in ["x", "y", "z"] {
+            let d = m["position"][k].as_f64().unwrap() - p["pose"]["position"][k].as_f64().unwrap();
+            worst_mocap = worst_mocap.max(d.abs());
+        }
+        captures += 1;
+    }
+    assert!(captures > 0, "no mocap pose logged");
+    assert!(worst_mocap < 0.005, "mocap position error {worst_mocap} m");
     // 14-bit encoders with their noise (docs/sensors.md) sit well inside 0.01
     // rad of the truth; the estimator's height error is millimetres (its RMS
     // is in the summary) — 2 cm bounds both with a wide margin.

@@ -321,6 +321,14 @@ pub fn encode_robot(
                     b.double(4, e.height_m);
                 });
             }
+            m.doubles(8, x.contact_force_n.as_deref().unwrap_or_default());
+            if let Some(c) = &x.mocap {
+                m.message(9, |b| {
+                    b.time(1, (c.captured_t_s * 1e9).round().max(0.0) as u64);
+                    b.v3(2, c.position_m);
+                    b.quat(3, c.orientation);
+                });
+            }
         }
     }
 }

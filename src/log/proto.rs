@@ -301,6 +301,16 @@ const MESSAGES: &[(&str, &[(&str, i32, K, L)])] = {
                 ("encoder_velocity_radps", 5, Double, Rep),
                 ("contact", 6, Bool, Rep),
                 ("estimate", 7, Msg(".quadsim.BaseEstimate"), One),
+                ("contact_force_n", 8, Double, Rep),
+                ("mocap", 9, Msg(".quadsim.MocapPose"), One),
+            ],
+        ),
+        (
+            "MocapPose",
+            &[
+                ("captured", 1, T, One),
+                ("position", 2, V, One),
+                ("orientation", 3, Q, One),
             ],
         ),
     ]

@@ -218,6 +218,16 @@ impl Schema {
                             "height_m": number("Base height above the ground under it (m)"),
                         },
                     },
+                    "contact_force_n": numbers_or_null("Contact sensors' measured normal forces (N), foot order; null unless the sensors output forces"),
+                    "mocap": {
+                        "type": ["object", "null"],
+                        "description": "The latest delivered motion-capture pose (null without mocap or before its first delivery)",
+                        "properties": {
+                            "captured": time("When the pose was captured (simulation time; it is delivered the mocap latency later)"),
+                            "position": vector3("Torso position (m, world), with noise"),
+                            "orientation": quaternion("Torso orientation (torso to world), with noise"),
+                        },
+                    },
                 }),
             ),
             Schema::RobotMetrics => object(

@@ -104,6 +104,12 @@ pub struct SensingLog {
     pub contact: Vec<bool>,
     /// The base state estimate.
     pub estimate: Option<quadsim_engine::estimation::BaseEstimate>,
+    /// Contact sensors' measured normal forces (N), foot order, when the
+    /// sensors output forces (`force_output`).
+    pub contact_force_n: Option<Vec<f64>>,
+    /// The latest delivered motion-capture pose (captured `latency` before
+    /// it was delivered), when mocap is on and has delivered one.
+    pub mocap: Option<quadsim_engine::sensors::MocapSample>,
 }
 
 /// One foot at the sample's instant (world frame, SI).
@@ -816,6 +822,13 @@ fn sample_robot(
             encoder_velocity_radps: x.suite.encoders.as_ref().map(|e| e.velocity_radps.clone()),
             contact: x.contacts.clone(),
             estimate: x.estimator.as_ref().map(|e| e.estimate),
+            contact_force_n: x
+                .suite
+                .contacts
+                .as_ref()
+                .filter(|c| c.params.force_output)
+                .map(|c| c.force_n.clone()),
+            mocap: x.suite.mocap.as_ref().and_then(|m| m.last),
         }),
         link_transforms: tf.map_or_else(Vec::new, |p| {
             link_transforms(model, data, q, base_orientation, p)
