@@ -287,16 +287,7 @@ pub fn headless(r: &Replay, frames: u32, w: u16, h: u16) -> String {
         term.draw(|f| r.draw(f, t, false))
             .expect("in-memory terminal");
     }
-    let buf = term.backend().buffer();
-    let mut out = String::new();
-    for y in 0..buf.area.height {
-        let line: String = (0..buf.area.width)
-            .map(|x| buf[(x, y)].symbol().to_string())
-            .collect();
-        out.push_str(line.trim_end());
-        out.push('\n');
-    }
-    out
+    super::dashboard::buffer_text(term.backend().buffer())
 }
 
 fn play<B: Backend>(term: &mut Terminal<B>, r: &Replay, speed: f64) -> std::io::Result<()>

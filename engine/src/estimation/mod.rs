@@ -231,17 +231,23 @@ impl BaseEstimator {
         // 4. measurement update
         let n = self.feet.len();
         self.kf.update(&self.meas[..n]);
+        self.set_estimate(input.t_s, omega, input.terrain);
+        self.remember();
+    }
+
+    /// The estimate from the filters' state at `t_s`, with the angular
+    /// velocity `omega` (torso frame) and the height above `terrain`.
+    fn set_estimate(&mut self, t_s: f64, omega: DVec3, terrain: &TerrainUnion) {
         let p = self.kf.position_m();
-        let ground = input.terrain.height(p.x, p.y).unwrap_or(0.0);
+        let ground = terrain.height(p.x, p.y).unwrap_or(0.0);
         self.estimate = BaseEstimate {
-            t_s: input.t_s,
+            t_s,
             orientation: self.attitude.orientation,
             position_m: p,
             velocity_world_mps: self.kf.velocity_mps(),
             omega_body_radps: omega,
             height_m: p.z - ground,
         };
-        self.remember();
     }
 
     /// Records the latest estimate in the history ring.
@@ -307,12 +313,8 @@ impl BaseEstimator {
             let (t, p, q) = self.history[i];
             self.history[i] = (t, p + dp, (dq * q).normalize());
         }
-        let p = self.kf.position_m();
-        let ground = terrain.height(p.x, p.y).unwrap_or(0.0);
-        self.estimate.orientation = self.attitude.orientation;
-        self.estimate.position_m = p;
-        self.estimate.velocity_world_mps = self.kf.velocity_mps();
-        self.estimate.height_m = p.z - ground;
+        let (t_s, omega) = (self.estimate.t_s, self.estimate.omega_body_radps);
+        self.set_estimate(t_s, omega, terrain);
         true
     }
 
