@@ -9,20 +9,25 @@
 //! needs contact), KGU (knee guard, rad), BW (swing bandwidth, Hz), KX/KXD
 //! (scale of the x stiffness/damping), KR/KRD (rotational), PERIOD and FOUR (a trot's
 //! period and four-leg support, s), EVERY (steps per
-//! tick), PRINT (timeline interval, s; 0: none).
+//! tick), PRINT (timeline interval, s; 0: none), LEGMASS (scale of quad16's
+//! thigh, shank and foot masses), GAIT (trot, walk, pace, bound, pronk,
+//! stand), PERT and SEED (joint angles at the start moved by up to PERT rad,
+//! pseudo-randomly by SEED), STEPUP (a 5 cm platform from that x, m), SINE
+//! (trot_sine's waves from that x, m).
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use quadsim_engine::contact::{
     ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
 };
 use quadsim_engine::control::joint_pd::bandwidth_gains;
 use quadsim_engine::control::walker::{Walker, WalkerInput, WalkerParams};
 use quadsim_engine::gait::scheduler::LegPhase;
+use quadsim_engine::gait::{Gait, GaitKind};
 use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::model::{BaseKind, Model};
 use quadsim_engine::spatial::rpy_from_rot;
-use quadsim_engine::terrain::TerrainUnion;
+use quadsim_engine::terrain::{Flat, Sinusoid, TerrainPatch, TerrainShape, TerrainUnion};
 use quadsim_engine::{Data, robots};
 
 fn env(k: &str) -> Option<f64> {
@@ -37,7 +42,18 @@ fn main() {
     let vx = args.first().copied().unwrap_or(1.5);
     let dur = args.get(1).copied().unwrap_or(10.0);
     let robot = std::env::var("ROBOT").unwrap_or_else(|_| "quad16".into());
-    let desc = robots::builtin(&robot).unwrap();
+    let desc = match env("LEGMASS") {
+        Some(k) if robot == "quad16" => robots::builtin_with(
+            &robot,
+            &[
+                ("thigh.mass_kg", 2.5 * k),
+                ("shank.mass_kg", 1.5 * k),
+                ("foot.mass_kg", 0.5 * k),
+            ],
+        )
+        .unwrap(),
+        _ => robots::builtin(&robot).unwrap(),
+    };
     let mut model = Model::from_description(&desc, BaseKind::Floating).unwrap();
     if let Some(l) = env("ELIM") {
         for e in model.effort_limit[6..].iter_mut() {
@@ -96,8 +112,52 @@ fn main() {
     if let Some(x) = env("KRD") {
         p.vmc.gains.damping_nms_per_rad *= x;
     }
+    if let Ok(g) = std::env::var("GAIT") {
+        let kind = match g.as_str() {
+            "walk" => GaitKind::Walk,
+            "pace" => GaitKind::Pace,
+            "bound" => GaitKind::Bound,
+            "pronk" => GaitKind::Pronk,
+            "stand" => GaitKind::Stand,
+            _ => GaitKind::Trot,
+        };
+        p.gait = Gait::default_of(kind).unwrap();
+    }
+    let mut q0 = q0;
+    if let Some(eps) = env("PERT") {
+        // a deterministic perturbation of the joint angles, ±eps rad
+        let seed = env("SEED").unwrap_or(1.0);
+        for (j, qj) in q0[7..].iter_mut().enumerate() {
+            *qj += eps * (seed * 12.9898 + j as f64 * 78.233).sin();
+        }
+    }
     let mut walker = Walker::new(&desc, &model, p).unwrap();
-    let terrain = TerrainUnion::flat(0.0, GroundMaterial::preset("concrete").unwrap());
+    let concrete = GroundMaterial::preset("concrete").unwrap();
+    let mut terrain = TerrainUnion::flat(0.0, concrete);
+    if let Some(x0) = env("SINE") {
+        // trot_sine's waves: amplitude 5 cm, wavelength 2 m, 40 m long from x = SINE
+        terrain = terrain.with(
+            TerrainPatch::new(
+                TerrainShape::Sinusoid(Sinusoid::new(0.05, 2.0, DVec2::new(40.0, 20.0)).unwrap()),
+                DVec3::new(x0 + 20.0, 0.0, 0.0),
+                0.0,
+                concrete,
+            )
+            .unwrap(),
+        );
+    }
+    if let Some(edge) = env("STEPUP") {
+        // a 5 cm platform from x = edge on
+        terrain = terrain.with(
+            TerrainPatch::new(
+                TerrainShape::Flat(Flat::new(DVec2::new(20.0, 20.0)).unwrap()),
+                DVec3::new(edge + 10.0, 0.0, 0.05),
+                0.0,
+                concrete,
+            )
+            .unwrap(),
+        );
+    }
     let points = ContactPoint::feet(&model, &desc);
     let mut states = vec![ContactState::default(); points.len()];
     let mut st = State {
