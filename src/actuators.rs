@@ -2,7 +2,7 @@
 //! `docs/actuators.md` and `scenarios/README.md`).
 //!
 //! Resolution per joint: the kind (the joint's own `kind`, else the table's,
-//! else `ideal`), then the model's default set for that kind
+//! else the model's default kind, [`default_kind`]), then the model's default set for that kind
 //! ([`model_defaults`]; other models: the joint's effort and velocity limits
 //! as stall torque and no-load speed), then the table's parameters, then the
 //! joint's overrides (`joints.NAME`: first the `*suffix` patterns, in name
@@ -119,9 +119,24 @@ fn matches(pattern: &str, name: &str) -> bool {
     }
 }
 
+/// The kind a joint gets when the scenario names none: `dc_motor` for
+/// quad16 (its default motors, `docs/actuators.md`), `ideal` for every other
+/// model, and `ideal` whenever the controller imposes the motion instead of
+/// commanding torques (`imposed_motion`: the prescribed controller's hybrid
+/// mode, Study B's way of walking quad12). quad16 walks at least as well on
+/// its motors as on ideal sources (`docs/actuators.md`, "Defaults").
+pub fn default_kind(model_name: &str, imposed_motion: bool) -> ActuatorKind {
+    if model_name == "quad16" && !imposed_motion {
+        ActuatorKind::DcMotor
+    } else {
+        ActuatorKind::Ideal
+    }
+}
+
 /// The actuator of each joint of `model` (built-in name `model_name`) from
-/// the robot's `[robots.actuators]` at key path `p.actuators`; `None` when
-/// every joint is ideal. Errors name the key path of the offending entry.
+/// the robot's `[robots.actuators]` at key path `p.actuators`, joints of no
+/// stated kind taking `default` ([`default_kind`]); `None` when every joint
+/// is ideal. Errors name the key path of the offending entry.
 ///
 /// # Errors
 /// Unknown keys or kinds, non-numbers, a `joints` entry matching no joint,
@@ -132,9 +147,10 @@ pub fn joint_actuators(
     spec: &ActuatorsSpec,
     model_name: &str,
     model: &Model,
+    default: ActuatorKind,
 ) -> Result<Option<Vec<ActuatorSpec>>, ScenarioError> {
     let path = format!("{p}.actuators");
-    let all_kind = check_table(loc, &path, &spec.params)?.unwrap_or(ActuatorKind::Ideal);
+    let all_kind = check_table(loc, &path, &spec.params)?.unwrap_or(default);
     let names: Vec<String> = (model.base_nv()..model.nv)
         .map(|vi| model.joint_name[model.v_body[vi]].clone())
         .collect();

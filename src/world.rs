@@ -245,8 +245,16 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         let root = sim
             .spawn_robot(&spawn_desc)
             .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
-        let actuators =
-            crate::actuators::joint_actuators(&loc, &p, &r.actuators, &r.model, &model)?;
+        let imposed_motion = matches!(&controller, Controller::Prescribed(pc)
+            if pc.controller.params.mode == PrescribedMode::Hybrid);
+        let actuators = crate::actuators::joint_actuators(
+            &loc,
+            &p,
+            &r.actuators,
+            &r.model,
+            &model,
+            crate::actuators::default_kind(&r.model, imposed_motion),
+        )?;
         if let Some(specs) = &actuators {
             if let Controller::Prescribed(pc) = &controller
                 && pc.controller.params.mode == PrescribedMode::Hybrid

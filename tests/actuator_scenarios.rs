@@ -1,6 +1,7 @@
 //! `[robots.actuators]` in scenario files: defaults and overrides resolve
 //! per joint, bad entries get errors naming file, line and key path, and
-//! quad16 with its default DC motors trots `scenarios/trot.toml` (0.5 m/s).
+//! quad16 with its default DC motors trots `scenarios/trot.toml` (0.5 m/s)
+//! and, at 1.0 m/s, where the ideal sources fall.
 
 use std::path::Path;
 
@@ -173,5 +174,120 @@ fn quad16_trots_on_its_default_dc_motors() {
     for j in dc["actuators"]["joints"].as_array().unwrap() {
         assert_eq!(j["kind"], "dc_motor");
         assert!(j["peak_torque_nm"].as_f64().unwrap() <= 100.0 + 1e-9);
+    }
+}
+
+/// The kinds a scenario gets without `[robots.actuators]`: quad16 its DC
+/// motors, quad12 (and any model) ideal sources, and quad16 under the
+/// prescribed controller's hybrid mode (which imposes the motion) ideal.
+#[test]
+fn default_kind_is_per_model() {
+    let kinds = |src: &str| -> Option<Vec<ActuatorKind>> {
+        let mut w = build(src).unwrap();
+        let root = w.robots[0].1;
+        let sim = w.sim.robot_mut(root).unwrap();
+        sim.workspace
+            .actuators
+            .as_ref()
+            .map(|a| a.specs().iter().map(|s| s.kind).collect())
+    };
+    let q16 = kinds(BASE).expect("quad16 gets motors");
+    assert_eq!(q16.len(), 16);
+    assert!(q16.iter().all(|k| *k == ActuatorKind::DcMotor), "{q16:?}");
+    assert_eq!(
+        kinds(&with_actuators("[robots.actuators]\nkind = \"ideal\"\n")),
+        None
+    );
+    let q12 = BASE
+        .replace("model = \"quad16\"", "model = \"quad12\"")
+        .replace("kp_nm_per_rad = 300.0", "kp_nm_per_rad = 3.0");
+    assert_eq!(kinds(&q12), None);
+    let hybrid = std::fs::read_to_string("scenarios/small_trot.toml")
+        .unwrap()
+        .replace("model = \"quad12\"", "model = \"quad16\"");
+    assert_eq!(kinds(&hybrid), None);
+}
+
+/// `trot.toml` commanded `v_x_mps`, with the start moved `dx_m` along x and
+/// the given actuator kind: (fell, mean forward speed).
+fn trot_at(v_x_mps: f64, dx_m: f64, kind: &str) -> (bool, f64) {
+    let src = std::fs::read_to_string("scenarios/trot.toml")
+        .unwrap()
+        .replace("v_x_mps = 0.5", &format!("v_x_mps = {v_x_mps}"))
+        .replace(
+            "model = \"quad16\"",
+            &format!("model = \"quad16\"\nstart_xy_m = [{dx_m}, 0.0]"),
+        )
+        .replace(
+            "[robots.controller]",
+            &format!("[robots.actuators]\nkind = \"{kind}\"\n\n[robots.controller]"),
+        );
+    let mut w = build(&src).unwrap();
+    w.sim.run(w.steps);
+    let (name, root) = w.robots[0].clone();
+    let j = robot_json(&name, w.sim.robot(root).unwrap());
+    (
+        j["fell"].as_bool().unwrap(),
+        j["mean_forward_speed_mps"].as_f64().unwrap(),
+    )
+}
+
+/// Why quad16's default is its DC motor: at 1.0 m/s the trot holds on the
+/// motors and falls on ideal sources. The runs are chaotic, so three
+/// micrometre neighbours of the start stand for the scenario (measured:
+/// ideal 6 of 6 fall, motors 1 of 6, `docs/actuators.md`); asserted: at
+/// most one of three falls on the motors, the others within 10 % of the
+/// command, and at least two of three fall on ideal sources.
+#[test]
+fn quad16_holds_one_metre_per_second_on_its_motors_not_on_ideal_sources() {
+    let dxs = [3e-6, 6e-6, 9e-6];
+    let motor: Vec<_> = dxs.iter().map(|dx| trot_at(1.0, *dx, "dc_motor")).collect();
+    let ideal: Vec<_> = dxs.iter().map(|dx| trot_at(1.0, *dx, "ideal")).collect();
+    println!("1.0 m/s, (fell, mean speed): motors {motor:?}, ideal {ideal:?}");
+    assert!(motor.iter().filter(|r| r.0).count() <= 1, "{motor:?}");
+    for r in motor.iter().filter(|r| !r.0) {
+        assert!((r.1 - 1.0).abs() < 0.1, "{motor:?}");
+    }
+    assert!(ideal.iter().filter(|r| r.0).count() >= 2, "{ideal:?}");
+}
+
+/// The table of `docs/actuators.md` ("Defaults"): falls out of six
+/// neighbours, per actuator variant, at 1.0 m/s.
+/// `cargo test --release --test actuator_scenarios motor_robustness_table -- --ignored --nocapture`
+#[test]
+#[ignore = "prints the table of docs/actuators.md (60 runs of 10 s)"]
+fn motor_robustness_table() {
+    for (label, table) in [
+        ("ideal", "kind = \"ideal\""),
+        ("default motors", "kind = \"dc_motor\""),
+        ("no rotor inertia", "rotor_inertia_kgm2 = 0.0"),
+        ("no viscous friction", "viscous_nms_per_rad = 0.0"),
+        ("no Coulomb friction", "coulomb_nm = 0.0"),
+        ("no torque lag", "bandwidth_hz = 100000.0"),
+        ("no speed envelope", "no_load_speed_radps = 100000.0"),
+    ] {
+        let mut falls = 0;
+        for d in 1..=6 {
+            let src = std::fs::read_to_string("scenarios/trot.toml")
+                .unwrap()
+                .replace("v_x_mps = 0.5", "v_x_mps = 1.0")
+                .replace(
+                    "model = \"quad16\"",
+                    &format!(
+                        "model = \"quad16\"\nstart_xy_m = [{}, 0.0]",
+                        3e-6 * d as f64
+                    ),
+                )
+                .replace(
+                    "[robots.controller]",
+                    &format!("[robots.actuators]\n{table}\n\n[robots.controller]"),
+                );
+            let mut w = build(&src).unwrap();
+            w.sim.run(w.steps);
+            let (name, root) = w.robots[0].clone();
+            let j = robot_json(&name, w.sim.robot(root).unwrap());
+            falls += usize::from(j["fell"].as_bool().unwrap());
+        }
+        println!("| {label} | {falls} of 6 fall |");
     }
 }

@@ -178,11 +178,17 @@ fn an_impossible_load_is_reported_not_carried_with_its_reason() {
     let reason = r["load"]["reason"].as_str().unwrap();
     assert!(["fell", "saturated"].contains(&reason), "{reason}");
     assert!((r["total_mass_kg"].as_f64().unwrap() - 88.0).abs() < 1e-9);
+    // quad16's default DC motors: the demand meets their torque–speed
+    // envelope (the stall torque, 40 N·m, at zero speed) before it reaches
+    // the effort limit, and their lag lets the applied torque approach the
+    // limit without quite reaching it
     let a = &r["actuators"];
+    let at_limit = a["max_time_share_at_torque_limit"].as_f64().unwrap()
+        + a["max_time_share_at_envelope_limit"].as_f64().unwrap();
+    assert!(at_limit > 0.05, "{a}");
     assert!(
-        a["max_time_share_at_torque_limit"].as_f64().unwrap() > 0.05,
+        a["max_peak_torque_share"].as_f64().unwrap() > 1.0 - 1e-9,
         "{a}"
     );
-    assert_eq!(a["max_peak_torque_share"].as_f64().unwrap(), 1.0);
     let _ = std::fs::remove_dir_all(dir);
 }

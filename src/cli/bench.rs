@@ -49,10 +49,12 @@ pub struct BenchArgs {
     pub json: Option<PathBuf>,
 }
 
-/// The scenario of one configuration.
+/// The scenario of one configuration. quad16 runs on ideal torque sources
+/// (not its default DC motors), like MuJoCo's `motor` actuators in the
+/// side-by-side model, so the figures compare with it and with earlier runs.
 pub fn herd_scenario(model: &str, robots: usize) -> Result<String, CliError> {
     let controller = match model {
-        "quad16" => "kind = \"vmc\"\nv_x_mps = 0.5",
+        "quad16" => "kind = \"vmc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\"",
         "quad12" => "kind = \"joint_pd\"",
         other => {
             return Err(bad(format!("--model {other}: expected quad16 or quad12")));
