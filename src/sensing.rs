@@ -353,6 +353,9 @@ pub fn robot_sensing(
     }
     let nj = model.nv - model.base_nv();
     let suite = SensorSuite::new(&cfg, seed, nj, feet.len(), 0.0);
+    // without a mocap sensor nothing is fused, so no history is kept for it
+    let mut params = params;
+    params.mocap.enabled &= cfg.mocap.is_some();
     let estimator = cfg
         .imu
         .is_some()

@@ -33,6 +33,21 @@ fn bench_reports_throughput_and_memory_per_robot() {
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("robot-steps/s"), "{stdout}");
+    // the last line is JSON with the keys, for the last configuration
+    let last: serde_json::Value =
+        serde_json::from_str(stdout.lines().last().unwrap()).expect("last line is JSON");
+    assert_eq!(last["robots"], 4, "{last}");
+    assert_eq!(last["threads"], 2, "{last}");
+    let rate = last["robot_steps_per_s"].as_f64().unwrap();
+    let ns = last["ns_per_robot_step"].as_f64().unwrap();
+    assert!(
+        rate > 0.0 && (rate * ns * 1e-9 - 1.0).abs() < 1e-9,
+        "{last}"
+    );
+    // real time: 0.5 ms of simulated time per step, robots stepped together
+    let rtf = last["real_time_factor"].as_f64().unwrap();
+    assert!((rtf - rate / 4.0 * 0.0005).abs() < 1e-9 * rtf, "{last}");
+    assert_eq!(last["points"].as_array().unwrap().len(), 4, "{last}");
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     let points = v["points"].as_array().unwrap();
     assert_eq!(points.len(), 4);

@@ -62,8 +62,6 @@ pub struct Data {
     pub jacobian: Vec<f64>,
     /// Scratch of length nv.
     pub scratch_v: Vec<f64>,
-    /// Scratch of length nv × nv (factorisations).
-    pub scratch_vv: Vec<f64>,
     /// What the kinematic fields (`origin`, `pose`, `s`, `s_base`,
     /// `inertia_ref`, `vel`) were computed for, so that a repeated call at
     /// the same state (observation, then the integrator's first stage) is
@@ -110,7 +108,46 @@ impl Data {
             gravity: vec![0.0; nv],
             jacobian: vec![0.0; 3 * nv],
             scratch_v: vec![0.0; nv],
-            scratch_vv: vec![0.0; nv * nv],
+            kin: KinematicsKey {
+                model: 0,
+                q: vec![0.0; model.nq],
+                v: vec![0.0; nv],
+                level: 0,
+            },
+        }
+    }
+
+    /// A workspace for [`crate::kinematics::forward_kinematics`] and the
+    /// point queries on its result only (poses, subspaces, velocities,
+    /// reference inertias): the dynamics arrays are left empty, so the
+    /// dynamics algorithms must not be run on it. For state estimators,
+    /// which need a second copy of a robot's kinematics and nothing else.
+    pub fn for_kinematics(model: &Model) -> Data {
+        let nb = model.nbodies;
+        let nv = model.nv;
+        Data {
+            origin: DVec3::ZERO,
+            pose: vec![Transform::IDENTITY; nb],
+            vel: vec![Motion::ZERO; nb],
+            s: vec![Motion::ZERO; nb],
+            s_base: [Motion::ZERO; 6],
+            inertia_ref: vec![RigidInertia::ZERO; nb],
+            acc: Vec::new(),
+            f: Vec::new(),
+            f_ext: Vec::new(),
+            ia: Vec::new(),
+            pa: Vec::new(),
+            u: Vec::new(),
+            d_inv: Vec::new(),
+            u_tau: Vec::new(),
+            c: Vec::new(),
+            ddq: Vec::new(),
+            tau: Vec::new(),
+            mass_matrix: Vec::new(),
+            nle: Vec::new(),
+            gravity: Vec::new(),
+            jacobian: Vec::new(),
+            scratch_v: Vec::new(),
             kin: KinematicsKey {
                 model: 0,
                 q: vec![0.0; model.nq],

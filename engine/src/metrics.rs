@@ -154,9 +154,10 @@ pub struct MetricsAccumulator {
 /// (Andrew's monotone chain, one stack each). The maximum (minimum) of
 /// `y − s·x` over all points, for any slope `s` known only at the end, is
 /// attained at a vertex of the upper (lower) hull. Amortised O(1) per point;
-/// the stacks are pre-sized for about a hundred gait cycles (a trot adds a few
+/// the stacks are pre-sized for tens of gait cycles (a trot adds a few
 /// vertices per cycle) and only a longer run grows them, a few times in all
-/// (they double), not per step.
+/// (they double), not per step. (8 KiB per robot: herds keep thousands; 512
+/// points each took 16 KiB.)
 #[derive(Clone, Debug)]
 struct Hulls {
     upper: Vec<DVec2>,
@@ -164,7 +165,7 @@ struct Hulls {
 }
 
 impl Hulls {
-    const CAPACITY: usize = 512;
+    const CAPACITY: usize = 256;
 
     fn new() -> Self {
         Self {

@@ -220,6 +220,7 @@ pub fn run(a: BenchArgs) -> Result<(), CliError> {
             "threads": p.threads,
             "robot_steps_per_s": p.robot_steps_per_s(),
             "us_per_robot_step": p.us_per_robot_step(),
+            "ns_per_robot_step": 1e3 * p.us_per_robot_step(),
             "real_time_factor": rt,
             "speedup_vs_1_thread": one,
             "bytes_per_robot": p.bytes_per_robot,
@@ -231,7 +232,7 @@ pub fn run(a: BenchArgs) -> Result<(), CliError> {
             "steps_per_block": a.steps,
             "repeats": a.repeats,
             "warmup_steps": a.warmup,
-            "points": rows,
+            "points": rows.clone(),
         });
         std::fs::write(path, serde_json::to_string_pretty(&v).expect("json") + "\n").map_err(
             |e| CliError::Io {
@@ -241,5 +242,10 @@ pub fn run(a: BenchArgs) -> Result<(), CliError> {
         )?;
         println!("wrote {}", path.display());
     }
+    // The last line: the last configuration as one line of JSON (the issue's
+    // keys), with every configuration under `points`.
+    let mut last = rows.last().cloned().unwrap_or_else(|| json!({}));
+    last["points"] = Value::Array(rows);
+    println!("{last}");
     Ok(())
 }

@@ -299,14 +299,30 @@ fn foot_constraints(params: &ForceQpParams, foot: &StanceFoot) -> [(DVec3, f64);
     ]
 }
 
-/// The stance-force QP with its dedicated solver and workspace; allocates
-/// nothing after construction.
+/// The stance-force QP with its dedicated solver; allocates nothing after
+/// construction. The QP's arrays and the solver's workspace (7.6 KiB, sized
+/// for four feet) hold nothing from one solve to the next (every entry a
+/// solve reads, it first writes), so one per thread serves every robot
+/// stepped on that thread instead of one per robot ([`WORKSPACE`]).
 #[derive(Clone, Debug)]
 pub struct ForceQp {
     /// Weights and bounds.
     pub params: ForceQpParams,
-    qp: DenseQp,
-    solver: ActiveSet,
+    /// Active-set iterations of the last solve that ran the solver.
+    iterations: usize,
+}
+
+thread_local! {
+    /// The QP and solver workspace of the solves run on this thread (made
+    /// on a thread's first solve; a solve borrows it for its duration only).
+    static WORKSPACE: std::cell::RefCell<(DenseQp, ActiveSet)> = std::cell::RefCell::new((
+        DenseQp {
+            // constraints in N: 1e-9 N is far below any force that matters
+            tolerance: 1e-9,
+            ..DenseQp::default()
+        },
+        ActiveSet::default(),
+    ));
 }
 
 impl ForceQp {
@@ -314,12 +330,7 @@ impl ForceQp {
     pub fn new(params: ForceQpParams) -> Self {
         ForceQp {
             params,
-            qp: DenseQp {
-                // constraints in N: 1e-9 N is far below any force that matters
-                tolerance: 1e-9,
-                ..DenseQp::default()
-            },
-            solver: ActiveSet::default(),
+            iterations: 0,
         }
     }
 
@@ -334,21 +345,26 @@ impl ForceQp {
         wrench: &Force,
     ) -> Result<FootForces, ForceQpError> {
         validate(&self.params, feet, wrench)?;
-        let (map, k) = build(&self.params, feet, wrench, &mut self.qp);
-        let mut out = [DVec3::ZERO; MAX_FEET];
-        if k == 0 {
-            return Ok(out);
-        }
-        let x = self.solver.solve(&self.qp)?;
-        for a in 0..k {
-            out[map[a]] = DVec3::new(x[3 * a], x[3 * a + 1], x[3 * a + 2]);
-        }
-        Ok(out)
+        WORKSPACE.with_borrow_mut(|(qp, solver)| {
+            let (map, k) = build(&self.params, feet, wrench, qp);
+            let mut out = [DVec3::ZERO; MAX_FEET];
+            if k == 0 {
+                return Ok(out);
+            }
+            let solved = solver.solve(qp).map(|x| {
+                for a in 0..k {
+                    out[map[a]] = DVec3::new(x[3 * a], x[3 * a + 1], x[3 * a + 2]);
+                }
+            });
+            self.iterations = solver.iterations;
+            solved?;
+            Ok(out)
+        })
     }
 
     /// Active-set iterations (constraint additions and drops) of the last solve.
     pub fn last_iterations(&self) -> usize {
-        self.solver.iterations
+        self.iterations
     }
 }
 

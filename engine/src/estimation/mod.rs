@@ -148,7 +148,7 @@ impl BaseEstimator {
         v0: &[f64],
         t0_s: f64,
     ) -> Self {
-        let mut data = Data::new(model);
+        let mut data = Data::for_kinematics(model);
         forward_kinematics(model, &mut data, q0, v0);
         let feet: Vec<ContactPoint> = feet.iter().take(KF_FEET).copied().collect();
         let feet_world: Vec<DVec3> = feet
@@ -179,7 +179,8 @@ impl BaseEstimator {
             v_fk: vec![0.0; model.nv],
             meas: [FootMeasurement::default(); KF_FEET],
             stance: [false; KF_FEET],
-            history: Vec::with_capacity(HISTORY),
+            // only mocap fusion reads the history: without it, none is kept
+            history: Vec::with_capacity(if params.mocap.enabled { HISTORY } else { 0 }),
             history_head: 0,
             last_mocap_t_s: None,
             params,
@@ -250,8 +251,12 @@ impl BaseEstimator {
         };
     }
 
-    /// Records the latest estimate in the history ring.
+    /// Records the latest estimate in the history ring (kept only while
+    /// mocap fusion is enabled: an estimator built without it keeps none).
     fn remember(&mut self) {
+        if !self.params.mocap.enabled {
+            return;
+        }
         let e = (
             self.estimate.t_s,
             self.estimate.position_m,
