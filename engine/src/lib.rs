@@ -34,6 +34,7 @@ pub mod gait;
 pub mod integrate;
 pub mod jacobian;
 pub mod kinematics;
+pub mod leg_lanes;
 pub mod legs;
 pub mod linalg;
 pub mod metrics;
