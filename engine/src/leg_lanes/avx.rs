@@ -8,7 +8,7 @@ use super::x4::{
 };
 use crate::data::Data;
 use crate::model::{JointType, Model};
-use crate::spatial::{Force, Motion, RigidInertia};
+use crate::spatial::{Force, Motion, RigidInertia, Sym6};
 use glam::DVec3;
 
 /// One group's constants (the same [`crate::model::PoseStep`] shortcuts hold
@@ -160,6 +160,19 @@ pub(crate) fn refresh_velocities(plan: &LegLanes, data: &mut Data) {
     }
 }
 
+/// ABA's pass 1 for the base (`aba::aba_passes`): its rigid inertia and
+/// bias force, minus the external force if any. Scalar code kept out of the
+/// AVX function: there LLVM packs it with VEX `vmovq` register moves, which
+/// valgrind 3.19 (callgrind, for instruction counts) cannot decode.
+#[inline(never)]
+fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6, Force) {
+    let mut p = vi.cross_force(inertia.mul_motion(vi));
+    if let Some(f) = f_ext {
+        p -= f;
+    }
+    (inertia.to_sym6(), p)
+}
+
 /// ABA's three passes after forward kinematics, legs in lanes
 /// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
 /// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) stays in `data.leg_aba` and
@@ -183,15 +196,11 @@ pub(crate) fn aba_passes_legs(
     let kin = &data.leg_kin[..ng];
     let work = &mut data.leg_aba[..ng];
     // Pass 1 of the base; its children's terms are added below.
-    let (mut ia0, mut pa0) = {
-        let inertia = &data.inertia_ref[0];
-        let vi = data.vel[0];
-        let mut p = vi.cross_force(inertia.mul_motion(vi));
-        if use_external {
-            p -= f_ext[0];
-        }
-        (inertia.to_sym6(), p)
-    };
+    let (mut ia0, mut pa0) = base_pass1(
+        &data.inertia_ref[0],
+        data.vel[0],
+        use_external.then(|| f_ext[0]),
+    );
     // Pass 2 from the feet to the hips, with pass 1 of each group on the way:
     // a body's own Iᴬ and pᴬ, then its one child's term added, as the
     // general path's `+=` does.
