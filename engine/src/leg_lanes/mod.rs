@@ -57,7 +57,7 @@ impl LegLanes {
         if !cfg!(target_arch = "x86_64")
             || crate::kinematics::DIAGONAL_INERTIA_SHORTCUT
             || n < 1 + LEGS
-            || (n - 1) % LEGS != 0
+            || !(n - 1).is_multiple_of(LEGS)
             || m.depth_order.len() != n - 1
             || m.pose_step.len() != n
         {

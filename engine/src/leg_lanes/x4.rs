@@ -526,7 +526,7 @@ impl Inertia4 {
     /// [`crate::spatial::RigidInertia::to_sym6`].
     #[inline]
     #[target_feature(enable = "avx")]
-    pub fn to_sym6(&self) -> Sym6x4 {
+    pub fn to_sym6(self) -> Sym6x4 {
         let c = self.com;
         let mc = c.scale(self.mass);
         let d = mc.dot(c);
