@@ -36,6 +36,13 @@ pub fn aba_from_kinematics(
 /// results are the same bits either way (nothing is fused into an FMA).
 #[multiversion(targets("x86_64+avx2+fma"))]
 fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_external: bool) {
+    // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
+    multiversion::target::match_target! {
+        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
+            return crate::leg_lanes::aba_passes_legs(model, plan, data, v, tau, use_external);
+        },
+        _ => {},
+    }
     let n = model.nbodies;
     let nv = model.nv;
     // Slices of known length up front, so that the loops below index

@@ -5,6 +5,7 @@
 //! world-fixed point [`Data::origin`] that coincides with the base origin when
 //! [`crate::kinematics::forward_kinematics`] last ran.
 
+use crate::leg_lanes::{GroupAba, GroupKin};
 use crate::model::Model;
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
@@ -46,6 +47,13 @@ pub struct Data {
     pub u_tau: Vec<f64>,
     /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (nbodies).
     pub c: Vec<Motion>,
+    /// ABA's workspace of the legs' groups when the model has them
+    /// ([`Model::leg_lanes`]); `ia`, `pa`, `u`, `d_inv`, `u_tau` and `c`
+    /// are then not written by ABA.
+    pub(crate) leg_aba: Vec<GroupAba>,
+    /// Forward kinematics of the legs' groups in lanes, beside `s`,
+    /// `inertia_ref` and `vel` (which hold the same numbers per body).
+    pub(crate) leg_kin: Vec<GroupKin>,
 
     // --- outputs ---
     /// Generalised acceleration from ABA (nv).
@@ -85,6 +93,7 @@ impl Data {
     pub fn new(model: &Model) -> Data {
         let nb = model.nbodies;
         let nv = model.nv;
+        let leg_groups = model.leg_lanes.as_ref().map_or(0, |p| p.groups.len());
         Data {
             origin: DVec3::ZERO,
             pose: vec![Transform::IDENTITY; nb],
@@ -101,6 +110,8 @@ impl Data {
             d_inv: vec![0.0; nb],
             u_tau: vec![0.0; nb],
             c: vec![Motion::ZERO; nb],
+            leg_aba: vec![GroupAba::default(); leg_groups],
+            leg_kin: vec![GroupKin::default(); leg_groups],
             ddq: vec![0.0; nv],
             tau: vec![0.0; nv],
             mass_matrix: vec![0.0; nv * nv],

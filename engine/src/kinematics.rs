@@ -91,6 +91,14 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     if let Some(v) = v {
         data.vel[0] = base_velocity(model, data, v);
     }
+    // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
+    multiversion::target::match_target! {
+        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
+            crate::leg_lanes::poses_legs(plan, data, q, v);
+            return;
+        },
+        _ => {},
+    }
     // Slices of known length up front, so that the loop indexes without
     // bounds checks (the body arrays all have `n` entries, `parent[i] < i`).
     let (parent, idx_q, idx_v) = (&model.parent[..n], &model.idx_q[..n], &model.idx_v[..n]);
@@ -195,6 +203,10 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
             data.vel[0] = base_velocity(model, data, v);
             for i in 1..model.nbodies {
                 data.vel[i] = data.vel[model.parent[i]] + data.s[i] * v[model.idx_v[i]];
+            }
+            #[cfg(target_arch = "x86_64")]
+            if let Some(plan) = &model.leg_lanes {
+                crate::leg_lanes::refresh_velocities(plan, data);
             }
         }
         _ => {

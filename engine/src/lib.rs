@@ -14,6 +14,7 @@
 //! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
 //! | ABA (forward dynamics) | [`aba`] | `ddq` |
 //! | kinematics + ABA for 4 robots of one model in SIMD lanes | [`batch`] | `BatchData::ddq` |
+//! | kinematics and ABA of one robot with its 4 legs in AVX lanes, chosen inside [`kinematics`] and [`aba`] for quad16's shape (same bits) | [`leg_lanes`] | the same fields |
 //! | point Jacobians | [`jacobian`] | `jacobian` |
 //! | CoM, momentum | [`com`] | (returns) |
 //! | energies | [`energy`] | (returns) |
@@ -34,6 +35,7 @@ pub mod gait;
 pub mod integrate;
 pub mod jacobian;
 pub mod kinematics;
+pub mod leg_lanes;
 pub mod legs;
 pub mod linalg;
 pub mod metrics;

@@ -14,6 +14,7 @@
 //! (the URDF document order).
 
 use crate::description::{JointKind, RobotDescription};
+use crate::leg_lanes::LegLanes;
 use crate::spatial::{RigidInertia, Transform};
 use glam::{DMat3, DVec3};
 use thiserror::Error;
@@ -205,6 +206,10 @@ pub struct Model {
     /// body in decreasing index, as `(1..n).rev()` does, so sums over
     /// children keep their order.
     pub depth_order: Vec<usize>,
+    /// The legs' bodies grouped by depth, one SIMD lane per leg, when the
+    /// model is a base with four unbranched chains of one length (quad16):
+    /// ABA then runs its legs in lanes ([`crate::leg_lanes`]).
+    pub leg_lanes: Option<LegLanes>,
 }
 
 /// The shortcuts of forward kinematics for one body, decided once per model
@@ -341,6 +346,7 @@ impl Model {
             load_nv: 0,
             pose_step: Vec::new(),
             depth_order: Vec::new(),
+            leg_lanes: None,
         };
 
         // Movable joints take q/v slots in document order, whatever the body order.
@@ -496,6 +502,7 @@ impl Model {
         }
         m.depth_order = (1..m.nbodies).collect();
         m.depth_order.sort_by_key(|&i| (depth[i], i));
+        m.leg_lanes = LegLanes::of(&m);
         Ok(m)
     }
 
@@ -537,6 +544,7 @@ impl Model {
             // derived from the fields above when the model is compiled
             pose_step: _,
             depth_order: _,
+            leg_lanes: _,
         } = self;
         *nq == other.nq
             && *nv == other.nv

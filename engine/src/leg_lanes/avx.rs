@@ -1,0 +1,304 @@
+//! The lane passes of [`super`]: forward kinematics and ABA with one AVX lane
+//! per leg. Each statement mirrors the general path's (named in comments).
+
+use super::LEGS;
+use super::LegLanes;
+use super::x4::{
+    F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis,
+};
+use crate::data::Data;
+use crate::model::{JointType, Model};
+use crate::spatial::{Force, Motion, RigidInertia, Sym6};
+use glam::DVec3;
+
+/// One group's constants (the same [`crate::model::PoseStep`] shortcuts hold
+/// for its four bodies).
+#[derive(Clone, Debug)]
+pub(crate) struct GroupStep {
+    /// Joint placements in the parent bodies.
+    placement: Transform4,
+    /// The placements' rotations are not the identity (else their product is skipped).
+    rotates: bool,
+    /// The placements' translations are not zero (else their product is skipped).
+    translates: bool,
+    /// The joints turn about ±(this unit axis) of their joint frames...
+    axis: usize,
+    /// ...with this sign.
+    sign: f64,
+    /// Each body's inertia in its own frame.
+    inertia: Inertia4,
+    /// Each joint's index in q.
+    idx_q: [usize; LEGS],
+    /// Each joint's index in v.
+    idx_v: [usize; LEGS],
+}
+
+impl GroupStep {
+    /// The constants of the bodies `grp` of `m` (checked by [`LegLanes::of`]).
+    pub(crate) fn of(m: &Model, grp: &[usize; LEGS]) -> GroupStep {
+        let st = m.pose_step[grp[0]];
+        let (axis, sign) = st.aligned_axis.expect("checked by LegLanes::of");
+        let pl = grp.map(|i| m.placement[i]);
+        let ri = grp.map(|i| m.inertia[i]);
+        GroupStep {
+            placement: Transform4::new(
+                M3::from_lanes(pl.map(|t| t.rot)),
+                V3::from_lanes(pl.map(|t| t.trans)),
+            ),
+            rotates: st.placement_rotates,
+            translates: st.placement_translates,
+            axis,
+            sign,
+            inertia: Inertia4 {
+                mass: F4::from_array(ri.map(|r| r.mass)),
+                com: V3::from_lanes(ri.map(|r| r.com)),
+                inertia_com: M3::from_lanes(ri.map(|r| r.inertia_com)),
+            },
+            idx_q: grp.map(|i| m.idx_q[i]),
+            idx_v: grp.map(|i| m.idx_v[i]),
+        }
+    }
+}
+
+/// One group's kinematics in lanes, beside the per-body copies in [`Data`]
+/// (ABA reads these instead of gathering from the per-body arrays).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GroupKin {
+    /// Motion subspace columns, reference frame.
+    s: Motion4,
+    /// Inertias in the reference frame.
+    inertia: Inertia4,
+    /// Spatial velocities, reference frame.
+    vel: Motion4,
+}
+
+/// What ABA's last pass needs of one group, kept from the inward pass.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GroupAba {
+    /// `U = Iᴬ S`.
+    u: Force4,
+    /// `1 / D`.
+    d_inv: F4,
+    /// `u = τ − Sᵀ pᴬ`.
+    u_tau: F4,
+    /// Velocity-product acceleration.
+    c: Motion4,
+}
+
+#[inline(always)]
+fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
+    F4::from_array([x[idx[0]], x[idx[1]], x[idx[2]], x[idx[3]]])
+}
+
+/// The legs' part of forward kinematics (`kinematics::poses`), after the
+/// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
+/// poses, motion subspaces, inertias and velocities of every leg body, in
+/// the per-body arrays and in `data.leg_kin`.
+#[target_feature(enable = "avx")]
+pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
+    let base = data.pose[0];
+    let origin = V3::splat(data.origin);
+    let mut xp = Transform4::new(M3::splat(base.rot), V3::splat(base.trans));
+    let mut vp = Motion4::splat(data.vel[0]);
+    let ng = plan.groups.len();
+    let kin = &mut data.leg_kin[..ng];
+    for ((grp, st), gk) in plan.groups.iter().zip(&plan.steps).zip(kin.iter_mut()) {
+        // The joint frame: parent pose ∘ placement, with the same skips.
+        let rot_j = if st.rotates {
+            xp.rot.mul_mat3(st.placement.rot)
+        } else {
+            xp.rot
+        };
+        let trans_j = if st.translates {
+            xp.rot.mul_vec3(st.placement.trans).add(xp.trans)
+        } else {
+            xp.trans
+        };
+        let qi = gather(q, &st.idx_q);
+        let col = rot_j.col(st.axis);
+        let x = Transform4::new(
+            rotate_about_axis(rot_j, st.axis, F4::splat(st.sign).mul(qi)),
+            trans_j,
+        );
+        let aw = if st.sign > 0.0 { col } else { col.neg() };
+        let r = x.trans.sub(origin);
+        let s = Motion4::new(r.cross(aw), aw);
+        let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
+        gk.s = s;
+        gk.inertia = inertia;
+        let (xs, ss) = (x.lanes(), s.lanes());
+        let (mass, com, ic) = (
+            inertia.mass.to_array(),
+            inertia.com.lanes(),
+            inertia.inertia_com.lanes(),
+        );
+        for k in 0..LEGS {
+            let i = grp[k];
+            data.pose[i] = xs[k];
+            data.s[i] = ss[k];
+            data.inertia_ref[i] = RigidInertia::new(mass[k], com[k], ic[k]);
+        }
+        if let Some(v) = v {
+            let vel = vp.add(s.scale(gather(v, &st.idx_v)));
+            gk.vel = vel;
+            let vs = vel.lanes();
+            for k in 0..LEGS {
+                data.vel[grp[k]] = vs[k];
+            }
+            vp = vel;
+        }
+        xp = x;
+    }
+}
+
+/// Copies the legs' per-body velocities into `data.leg_kin` (after
+/// forward kinematics' velocity-only update, which writes the per-body ones).
+pub(crate) fn refresh_velocities(plan: &LegLanes, data: &mut Data) {
+    let ng = plan.groups.len();
+    for (grp, gk) in plan.groups.iter().zip(&mut data.leg_kin[..ng]) {
+        gk.vel = Motion4::from_lanes(grp.map(|i| data.vel[i]));
+    }
+}
+
+/// ABA's pass 1 for the base (`aba::aba_passes`): its rigid inertia and
+/// bias force, minus the external force if any. Scalar code kept out of the
+/// AVX function: there LLVM packs it with VEX `vmovq` register moves, which
+/// valgrind 3.19 (callgrind, for instruction counts) cannot decode.
+#[inline(never)]
+fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6, Force) {
+    let mut p = vi.cross_force(inertia.mul_motion(vi));
+    if let Some(f) = f_ext {
+        p -= f;
+    }
+    (inertia.to_sym6(), p)
+}
+
+/// ABA's three passes after forward kinematics, legs in lanes
+/// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
+/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) stays in `data.leg_aba` and
+/// locals instead.
+#[target_feature(enable = "avx")]
+pub(crate) fn aba_passes_legs(
+    model: &Model,
+    plan: &LegLanes,
+    data: &mut Data,
+    v: &[f64],
+    tau: &[f64],
+    use_external: bool,
+) {
+    let n = model.nbodies;
+    let nv = model.nv;
+    let groups = &plan.groups[..];
+    let ng = groups.len();
+    let armature = &model.armature[..nv];
+    let (v, tau) = (&v[..nv], &tau[..nv]);
+    let f_ext = &data.f_ext[..n];
+    let kin = &data.leg_kin[..ng];
+    let work = &mut data.leg_aba[..ng];
+    // Pass 1 of the base; its children's terms are added below.
+    let (mut ia0, mut pa0) = base_pass1(
+        &data.inertia_ref[0],
+        data.vel[0],
+        use_external.then(|| f_ext[0]),
+    );
+    // Pass 2 from the feet to the hips, with pass 1 of each group on the way:
+    // a body's own Iᴬ and pᴬ, then its one child's term added, as the
+    // general path's `+=` does.
+    let one = F4::splat(1.0);
+    let mut child: Option<(Sym6x4, Force4)> = None;
+    for g in (0..ng).rev() {
+        let grp = &groups[g];
+        let st = &plan.steps[g];
+        let GroupKin {
+            s,
+            inertia,
+            vel: vi,
+        } = kin[g];
+        let mut ia = inertia.to_sym6();
+        let mut pai = vi.cross_force(inertia.mul_motion(vi));
+        if use_external {
+            pai = pai.sub(Force4::from_lanes(grp.map(|i| f_ext[i])));
+        }
+        let c = vi.cross(s.scale(gather(v, &st.idx_v)));
+        if let Some((cia, cpa)) = child {
+            ia = ia.add(cia);
+            pai = pai.add(cpa);
+        }
+        let u = ia.mul_motion(s);
+        let d_inv = one.div(s.dot(u).add(gather(armature, &st.idx_v)));
+        let ut = gather(tau, &st.idx_v).sub(s.dot(pai));
+        let ia_c = ia.mul_motion(c);
+        let ul = u.lin.scale(d_inv);
+        let ua = u.ang.scale(d_inv);
+        let term = Sym6x4 {
+            m: ia.m.sub(outer(ul, u.lin)),
+            h: ia.h.sub(outer(ua, u.lin)),
+            i: ia.i.sub(outer(ua, u.ang)),
+        };
+        let pa = pai.add(ia_c).add(u.scale(ut.sub(c.dot(u)).mul(d_inv)));
+        work[g] = GroupAba {
+            u,
+            d_inv,
+            u_tau: ut,
+            c,
+        };
+        child = Some((term, pa));
+    }
+    // The hips' terms into the base, in decreasing body index (lane 3 first),
+    // as the general path's reverse depth order adds them.
+    if let Some((term, pa)) = child {
+        let (terms, pas) = (term.lanes(), pa.lanes());
+        for k in (0..LEGS).rev() {
+            ia0.m += terms[k].m;
+            ia0.h += terms[k].h;
+            ia0.i += terms[k].i;
+            pa0 += pas[k];
+        }
+    }
+    // Pass 3: accelerations, root to leaves; gravity as a fictitious upward
+    // acceleration of the base.
+    let a_grav = Motion::new(model.gravity, DVec3::ZERO);
+    let a0 = match model.joint_type[0] {
+        JointType::Free => {
+            let r = data.pose[0].rot;
+            let applied = Force::new(
+                r * DVec3::new(tau[0], tau[1], tau[2]),
+                r * DVec3::new(tau[3], tau[4], tau[5]),
+            );
+            let rhs = applied - pa0;
+            match ia0.solve(rhs) {
+                Some(a) => a,
+                None => Motion::new(DVec3::NAN, DVec3::NAN),
+            }
+        }
+        _ => -a_grav,
+    };
+    // true accelerations are a' + a_grav
+    data.acc[0] = a0 + a_grav;
+    let a_grav_l = Motion4::splat(a_grav);
+    let mut a_parent = Motion4::splat(a0);
+    let acc = &mut data.acc[..n];
+    let ddq = &mut data.ddq[..nv];
+    for (((grp, st), w), gk) in groups.iter().zip(&plan.steps).zip(work.iter()).zip(kin) {
+        let a = a_parent.add(w.c);
+        let qdd = w
+            .u_tau
+            .sub(w.u.lin.dot(a.lin))
+            .sub(w.u.ang.dot(a.ang))
+            .mul(w.d_inv);
+        let a_i = a.add(gk.s.scale(qdd));
+        let (qdds, accs) = (qdd.to_array(), a_i.add(a_grav_l).lanes());
+        for k in 0..LEGS {
+            ddq[st.idx_v[k]] = qdds[k];
+            acc[grp[k]] = accs[k];
+        }
+        a_parent = a_i;
+    }
+    if model.joint_type[0] == JointType::Free {
+        let rt = data.pose[0].rot.transpose();
+        let a0_true = a0 + a_grav;
+        let al = rt * a0_true.lin;
+        let aa = rt * a0_true.ang;
+        data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
+    }
+}

@@ -1,0 +1,227 @@
+//! One robot's forward kinematics and ABA with its **legs in SIMD lanes**:
+//! for a base carrying four unbranched chains of identical shape — quad16's
+//! legs — the four bodies at each depth are one group of four f64 lanes in
+//! an AVX register, and the base stays scalar.
+//!
+//! The per-robot passes spend their time in short dependent chains of
+//! 3-vector and 3×3 arithmetic, one body after another; the four legs' chains
+//! are independent, so one AVX instruction can do the same operation for all
+//! four. The lane types (`x4`) repeat the scalar formulas operation for
+//! operation (same products, same order of sums, the same additions of exact
+//! zeros, no fused multiply–add), each lane calls the same `f64::sin_cos`, and
+//! the base receives its children's terms in the scalar order (decreasing body
+//! index): every output is **bit-identical** to the general path of
+//! [`crate::kinematics`] and [`crate::aba`] (tests below and
+//! `engine/tests/batch.rs`, which compares the robot-lanes batch with it).
+//!
+//! Used from the x86-64-v3 clones of the dispatched passes only (the lane
+//! code needs AVX); other CPUs and architectures run the general path, with
+//! the same bits.
+
+#[cfg(target_arch = "x86_64")]
+mod avx;
+#[cfg(target_arch = "x86_64")]
+mod x4;
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx::{
+    GroupAba, GroupKin, GroupStep, aba_passes_legs, poses_legs, refresh_velocities,
+};
+
+use crate::model::{JointType, Model};
+
+/// Legs per group: four f64 lanes fill one AVX register.
+pub const LEGS: usize = 4;
+
+/// The legs' bodies grouped by depth, decided once per model when the model
+/// is compiled, with what forward kinematics needs of each group in lanes.
+#[derive(Clone, Debug)]
+pub struct LegLanes {
+    /// `groups[g][k]`: the body at depth `g + 1` of leg `k`; legs in
+    /// increasing index of their first body, as [`Model::depth_order`] has them.
+    pub groups: Vec<[usize; LEGS]>,
+    /// Per group: the joints' placements, axis and the bodies' inertias in lanes.
+    #[cfg(target_arch = "x86_64")]
+    pub(crate) steps: Vec<GroupStep>,
+}
+
+impl LegLanes {
+    /// The grouping of `m`, when every body but the base is on one of four
+    /// unbranched chains from the base, all of one length, and the four
+    /// joints at each depth are revolute about the same signed unit axis of
+    /// their joint frames with the same placement shortcuts (quad16); `None`
+    /// otherwise, and on other architectures than x86-64 (the general path
+    /// then runs).
+    pub fn of(m: &Model) -> Option<LegLanes> {
+        let n = m.nbodies;
+        if !cfg!(target_arch = "x86_64")
+            || crate::kinematics::DIAGONAL_INERTIA_SHORTCUT
+            || n < 1 + LEGS
+            || !(n - 1).is_multiple_of(LEGS)
+            || m.depth_order.len() != n - 1
+            || m.pose_step.len() != n
+        {
+            return None;
+        }
+        let groups: Vec<[usize; LEGS]> = m
+            .depth_order
+            .chunks_exact(LEGS)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect();
+        for (g, grp) in groups.iter().enumerate() {
+            let first = m.pose_step[grp[0]];
+            first.aligned_axis?;
+            for (k, &i) in grp.iter().enumerate() {
+                let want_parent = if g == 0 { 0 } else { groups[g - 1][k] };
+                let st = m.pose_step[i];
+                if m.parent[i] != want_parent
+                    || m.joint_type[i] != JointType::Revolute
+                    || st.aligned_axis != first.aligned_axis
+                    || st.placement_rotates != first.placement_rotates
+                    || st.placement_translates != first.placement_translates
+                {
+                    return None;
+                }
+            }
+        }
+        // Each body of group g − 1 is then the parent of exactly one body of
+        // group g (the same lane), so every chain is unbranched.
+        Some(LegLanes {
+            #[cfg(target_arch = "x86_64")]
+            steps: groups.iter().map(|grp| GroupStep::of(m, grp)).collect(),
+            groups,
+        })
+    }
+}
+
+/// Placeholders of the lane workspaces in [`crate::Data`] where there are no lanes.
+#[cfg(not(target_arch = "x86_64"))]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GroupKin;
+
+/// Placeholders of the lane workspaces in [`crate::Data`] where there are no lanes.
+#[cfg(not(target_arch = "x86_64"))]
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GroupAba;
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use crate::aba::{aba, aba_from_kinematics};
+    use crate::kinematics::forward_kinematics;
+    use crate::model::BaseKind;
+    use crate::{Data, Model};
+    use glam::{DQuat, DVec3};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn bits(x: &[f64]) -> Vec<u64> {
+        x.iter().map(|e| e.to_bits()).collect()
+    }
+
+    /// Every output of kinematics and ABA, legs in lanes against the general
+    /// path (the same model with `leg_lanes = None`), bit for bit, at random
+    /// states with and without external forces, on quad16 (floating and
+    /// fixed base) and quad12.
+    #[test]
+    fn legs_in_lanes_give_the_general_paths_bits() {
+        for (name, base) in [
+            ("quad16", BaseKind::Floating),
+            ("quad16", BaseKind::Fixed),
+            ("quad12", BaseKind::Floating),
+        ] {
+            let desc = crate::robots::builtin(name).unwrap();
+            let fast = Model::from_description(&desc, base).unwrap();
+            if name == "quad16" {
+                assert!(fast.leg_lanes.is_some(), "{name} has its legs in lanes");
+            }
+            let mut general = fast.clone();
+            general.leg_lanes = None;
+            let mut r = ChaCha8Rng::seed_from_u64(7);
+            for trial in 0..50 {
+                let mut q = fast.neutral_q();
+                let nb = fast.base_nq();
+                if fast.is_floating() {
+                    let axis = DVec3::new(
+                        r.random_range(-1.0..1.0),
+                        r.random_range(-1.0..1.0),
+                        r.random_range(-1.0..1.0),
+                    )
+                    .normalize();
+                    let quat = DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
+                    q[..7].copy_from_slice(&[
+                        r.random_range(-5.0..5.0),
+                        r.random_range(-5.0..5.0),
+                        r.random_range(0.0..1.0),
+                        quat.x,
+                        quat.y,
+                        quat.z,
+                        quat.w,
+                    ]);
+                }
+                for x in &mut q[nb..] {
+                    *x = r.random_range(-3.0..3.0);
+                }
+                let v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
+                let tau: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-50.0..50.0)).collect();
+                let external = trial % 2 == 1;
+                let mut outs = Vec::new();
+                for m in [&fast, &general] {
+                    let mut d = Data::new(m);
+                    if external {
+                        forward_kinematics(m, &mut d, &q, &v);
+                        for (i, f) in d.f_ext.iter_mut().enumerate() {
+                            let k = i as f64;
+                            f.lin = DVec3::new(3.0 * k - 10.0, 0.5 * k, 40.0 - k);
+                            f.ang = DVec3::new(0.1 * k, -0.2, 0.3 * k - 1.0);
+                        }
+                        aba_from_kinematics(m, &mut d, &v, &tau, true);
+                    } else {
+                        aba(m, &mut d, &q, &v, &tau);
+                    }
+                    let mut all = d.ddq.clone();
+                    for i in 0..m.nbodies {
+                        all.extend(d.pose[i].rot.to_cols_array());
+                        all.extend(d.pose[i].trans.to_array());
+                        all.extend(d.vel[i].to_array());
+                        all.extend(d.s[i].to_array());
+                        all.extend(d.acc[i].to_array());
+                        let ri = d.inertia_ref[i];
+                        all.push(ri.mass);
+                        all.extend(ri.com.to_array());
+                        all.extend(ri.inertia_com.to_cols_array());
+                    }
+                    outs.push(all);
+                }
+                assert_eq!(
+                    bits(&outs[0]),
+                    bits(&outs[1]),
+                    "{name} {base:?} trial {trial}"
+                );
+            }
+        }
+    }
+
+    /// A repeated velocity at new joint rates (forward kinematics' velocity-only
+    /// path) leaves the lanes' velocities consistent with the per-body ones.
+    #[test]
+    fn velocity_only_update_keeps_the_lanes_current() {
+        let desc = crate::robots::builtin("quad16").unwrap();
+        let fast = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        let mut general = fast.clone();
+        general.leg_lanes = None;
+        let q = fast.neutral_q();
+        let v0 = vec![0.3; fast.nv];
+        let v1: Vec<f64> = (0..fast.nv).map(|k| 0.1 * k as f64 - 1.0).collect();
+        let tau = vec![1.0; fast.nv];
+        let mut outs = Vec::new();
+        for m in [&fast, &general] {
+            let mut d = Data::new(m);
+            forward_kinematics(m, &mut d, &q, &v0);
+            // same q, new v: velocities only
+            forward_kinematics(m, &mut d, &q, &v1);
+            aba_from_kinematics(m, &mut d, &v1, &tau, false);
+            outs.push(d.ddq.clone());
+        }
+        assert_eq!(bits(&outs[0]), bits(&outs[1]));
+    }
+}
