@@ -152,6 +152,12 @@ impl Data {
             d_inv: Vec::new(),
             u_tau: Vec::new(),
             c: Vec::new(),
+            leg_aba: Vec::new(),
+            // forward kinematics with the legs in lanes writes these
+            leg_kin: vec![
+                GroupKin::default();
+                model.leg_lanes.as_ref().map_or(0, |p| p.groups.len())
+            ],
             ddq: Vec::new(),
             tau: Vec::new(),
             mass_matrix: Vec::new(),
