@@ -8,7 +8,7 @@
 #![allow(unsafe_code)]
 
 use iceoryx2::prelude::ZeroCopySend;
-use quadsim_systems::RobotSample;
+use quadsim_systems::{RobotSample, SampleView, VelocityTargets};
 
 /// Version of [`RobotFrame`]'s layout; bump it (and the type name's `v1`)
 /// on any change of field, order or size.
@@ -116,9 +116,16 @@ impl Default for RobotFrame {
 
 /// Copies `src` into the head of `dst` and sets `dst[src.len()..old_len]`
 /// to NaN (entries a previous, longer value left behind).
+#[inline]
 fn fill(dst: &mut [f64], src: &[f64], old_len: usize) {
     let n = src.len().min(dst.len());
     dst[..n].copy_from_slice(&src[..n]);
+    clear_tail(dst, n, old_len);
+}
+
+/// Sets `dst[n..old_len]` to NaN.
+#[inline]
+fn clear_tail(dst: &mut [f64], n: usize, old_len: usize) {
     let end = old_len.min(dst.len());
     if end > n {
         dst[n..end].fill(f64::NAN);
@@ -133,22 +140,94 @@ impl RobotFrame {
         f
     }
 
+    /// Joints and feet a previous frame in `self` may have set: its counts,
+    /// or all entries when `self` holds no frame of this layout.
+    fn old_counts(&self) -> (usize, usize) {
+        if self.layout_version == LAYOUT_VERSION {
+            (self.dof(), self.feet())
+        } else {
+            (MAX_DOF, MAX_FEET)
+        }
+    }
+
+    /// Makes `self` the frame of the sampled instant `view` (step `tick`,
+    /// time `time_s`) in place, whatever frame it held (of this robot or
+    /// another), writing only what the frame carries: equal bit for bit to
+    /// [`Self::from_sample`] of the log's sample of that instant
+    /// ([`SampleView::to_sample`]), without making that sample.
+    #[inline]
+    pub fn set_from_view(&mut self, s: &SampleView<'_>, tick: u64, time_s: f64) {
+        let (old_dof, old_feet) = self.old_counts();
+        let q = s.joint_position();
+        let n_feet = s.feet();
+        self.layout_version = LAYOUT_VERSION;
+        self.robot_index = s.robot as u32;
+        self.tick = tick;
+        self.time_s = time_s;
+        self.n_dof = q.len() as u32;
+        self.n_feet = n_feet as u32;
+        self.base_position_m = s.base_position_m().to_array();
+        self.base_orientation_xyzw = s.base_orientation().to_array();
+        self.base_linear_mps = s.base_linear_mps().to_array();
+        self.base_angular_radps = s.base_angular_radps().to_array();
+        self.rpy_rad = s.rpy_rad().to_array();
+        self.com_m = s.com_m().to_array();
+        self.com_velocity_mps = s.com_velocity_mps().to_array();
+        fill(&mut self.joint_q_rad, q, old_dof);
+        fill(&mut self.joint_qd_radps, s.joint_velocity(), old_dof);
+        // a missing target is NaN over every joint (the previous frame may
+        // have had one)
+        let targets = s.joint_position_desired();
+        fill(
+            &mut self.joint_q_desired_rad,
+            targets.unwrap_or(&[]),
+            MAX_DOF,
+        );
+        match s.joint_velocity_desired() {
+            Some(VelocityTargets::Given(v)) => fill(&mut self.joint_qd_desired_radps, v, MAX_DOF),
+            Some(VelocityTargets::Zero(n)) => {
+                let n = n.min(MAX_DOF);
+                self.joint_qd_desired_radps[..n].fill(0.0);
+                clear_tail(&mut self.joint_qd_desired_radps, n, MAX_DOF);
+            }
+            None => clear_tail(&mut self.joint_qd_desired_radps, 0, MAX_DOF),
+        }
+        let mut n = 0;
+        for (dst, tau) in self.joint_tau_nm.iter_mut().zip(s.joint_effort()) {
+            *dst = tau;
+            n += 1;
+        }
+        clear_tail(&mut self.joint_tau_nm, n, old_dof);
+        fill(
+            &mut self.joint_tau_desired_nm,
+            s.joint_effort_command(),
+            old_dof,
+        );
+        self.contact_flags = 0;
+        self.slip_flags = 0;
+        let n_feet = n_feet.min(MAX_FEET);
+        for i in 0..n_feet {
+            let foot = s.foot(i);
+            if foot.in_contact {
+                self.contact_flags |= 1 << i;
+            }
+            if foot.slipping {
+                self.slip_flags |= 1 << i;
+            }
+            self.foot_force_n[i] = foot.force_n.to_array();
+            self.gait_phase[i] = foot.gait_phase.unwrap_or(f64::NAN);
+        }
+        for i in n_feet..old_feet.max(n_feet).min(MAX_FEET) {
+            self.foot_force_n[i] = [f64::NAN; 3];
+            self.gait_phase[i] = f64::NAN;
+        }
+    }
+
     /// Makes `self` equal to [`Self::from_sample`]`(s, tick, time_s)` in
-    /// place, whatever frame it held (of this robot or another): the
-    /// publisher keeps one frame per robot and rewrites only what a sample
-    /// sets, instead of filling a fresh frame with NaN first.
+    /// place, whatever frame it held (of this robot or another), as
+    /// [`Self::set_from_view`] does from a view.
     pub fn set_from_sample(&mut self, s: &RobotSample, tick: u64, time_s: f64) {
-        // entries past the new counts that the previous frame may have set
-        let old_dof = if self.layout_version == LAYOUT_VERSION {
-            self.dof()
-        } else {
-            MAX_DOF
-        };
-        let old_feet = if self.layout_version == LAYOUT_VERSION {
-            self.feet()
-        } else {
-            MAX_FEET
-        };
+        let (old_dof, old_feet) = self.old_counts();
         let (all_dof, all_feet) = (MAX_DOF, MAX_FEET);
         self.layout_version = LAYOUT_VERSION;
         self.robot_index = s.robot as u32;

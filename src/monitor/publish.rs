@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
-use quadsim_systems::{LogRecord, LogSink, RobotInfo};
+use quadsim_systems::{LogRecord, LogSink, RobotInfo, RobotSample, SampleView};
 use serde_json::json;
 
 use super::frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
@@ -53,7 +53,7 @@ pub struct FramePublisher {
     models: Vec<(String, String)>,
     stats: Arc<MonitorStats>,
     /// The last instant's frames, rewritten in place each publish
-    /// ([`RobotFrame::set_from_sample`]) and copied into the loan in one go.
+    /// ([`RobotFrame::set_from_view`]) and copied into the loan in one go.
     frames_scratch: std::sync::Mutex<Vec<RobotFrame>>,
 }
 
@@ -138,13 +138,34 @@ impl FramePublisher {
         self.stats.clone()
     }
 
-    /// Publishes one instant: one loan of `samples.len()` frames, written in
-    /// place, one send. A failed loan or send drops the instant and counts it.
-    pub fn publish(&self, tick: u64, samples: &[quadsim_systems::RobotSample]) {
+    /// Publishes the sampled instant `tick` of `views.len()` robots: one loan,
+    /// every robot's frame written from its view, one send. A failed loan or
+    /// send drops the instant and counts it.
+    pub fn publish_views(&self, tick: u64, views: &[SampleView<'_>]) {
+        let time_s = tick as f64 * self.dt_s;
+        self.publish_with(views.len(), |frames| {
+            for (f, v) in frames.iter_mut().zip(views) {
+                f.set_from_view(v, tick, time_s);
+            }
+        });
+    }
+
+    /// [`Self::publish_views`] from the log's samples of the instant.
+    pub fn publish(&self, tick: u64, samples: &[RobotSample]) {
+        let time_s = tick as f64 * self.dt_s;
+        self.publish_with(samples.len(), |frames| {
+            for (f, s) in frames.iter_mut().zip(samples) {
+                f.set_from_sample(s, tick, time_s);
+            }
+        });
+    }
+
+    /// One instant of `n` frames: `write` updates them in place, then they
+    /// are copied into the loan in one go and sent.
+    fn publish_with(&self, n: usize, write: impl FnOnce(&mut [RobotFrame])) {
         // late subscribers of the header get its last sample (history 1)
         let _ = self.header.update_connections();
-        let time_s = tick as f64 * self.dt_s;
-        let Ok(sample) = self.frames.loan_slice_uninit(samples.len()) else {
+        let Ok(sample) = self.frames.loan_slice_uninit(n) else {
             self.stats.dropped.fetch_add(1, Ordering::Relaxed);
             return;
         };
@@ -152,10 +173,8 @@ impl FramePublisher {
             .frames_scratch
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        frames.resize(samples.len(), RobotFrame::default());
-        for (f, s) in frames.iter_mut().zip(samples) {
-            f.set_from_sample(s, tick, time_s);
-        }
+        frames.resize(n, RobotFrame::default());
+        write(&mut frames);
         let sample = sample.write_from_slice(&frames);
         match sample.send() {
             Ok(_) => self.stats.published.fetch_add(1, Ordering::Relaxed),
@@ -218,6 +237,14 @@ impl MonitorSink {
 }
 
 impl LogSink for MonitorSink {
+    fn takes_views(&self) -> bool {
+        true
+    }
+
+    fn send_views(&mut self, _t_ns: u64, step: u64, views: &[SampleView<'_>]) {
+        self.publisher.publish_views(step, views);
+    }
+
     fn send(&mut self, record: LogRecord) {
         match record {
             LogRecord::Robots { robots, .. } => self.publisher.publish_header(&robots),

@@ -9,11 +9,13 @@
 //! the robot's own copy), the [`Observation`](quadsim_components::Observation)
 //! of the `Contact` stage (CoM position and velocity), the contact states the
 //! step used, and the actuator command applied over the step. So the sample
-//! for `t_j` is written in step `j`'s `Publish` stage. Two things are
-//! evaluated again at the snapshot, with the engine's own functions: forward
-//! kinematics (link poses, base twist) and the contact forces (with the very
-//! contact states the step used, so they equal the forces of the step's first
-//! derivative evaluation). The state after the last step, `t_N`, is sampled
+//! for `t_j` is written in step `j`'s `Publish` stage. The kinematics at the
+//! snapshot (link poses, base twist) are the robot's own, which a
+//! semi-implicit Euler step leaves at its start state (its kinematics cache
+//! says whether they are; else they are computed again, with the engine's
+//! own function); the contact forces are evaluated there again (with the
+//! very contact states the step used, so they equal the forces of the step's
+//! first derivative evaluation). The state after the last step, `t_N`, is sampled
 //! by [`finish_logging`], which runs the `Contact` and `Control` systems once
 //! more at that state, exactly as the next step would.
 //!
@@ -23,9 +25,10 @@
 //! included. Robots of one instant share one [`LogRecord::Step`]; a robot not
 //! due at that instant is simply absent from it.
 //!
-//! The sampling is cheap (one forward-kinematics pass, one contact
-//! evaluation and a few copies, on the steps that sample or snapshot only);
-//! encoding and compression happen in the sink, off the simulation thread.
+//! The sampling is cheap (a contact evaluation and a few copies, on the steps
+//! that sample or snapshot only; a sink taking [`SampleView`]s copies
+//! nothing); encoding and compression happen in the sink, off the simulation
+//! thread.
 
 use std::sync::Arc;
 
@@ -36,7 +39,7 @@ use quadsim_components::{
     ControlRate, Controller, Robot, RobotBatch, RobotIndex, RobotSim, SimClock, SimThreadPool,
     describe_robot,
 };
-use quadsim_engine::contact::{ContactEval, contact_forces};
+use quadsim_engine::contact::{ContactEval, evaluate};
 use quadsim_engine::description::RobotDescription;
 use quadsim_engine::kinematics::{forward_kinematics, frame_pose};
 use quadsim_engine::model::JointType;
@@ -54,6 +57,20 @@ pub trait LogSink: Send + Sync + 'static {
 
     /// Passes on whatever the sink holds back (the log is about to end).
     fn flush(&mut self) {}
+
+    /// Whether the sink takes each instant's samples as borrowed views
+    /// ([`LogSink::send_views`]: no copy, no allocation) instead of
+    /// [`LogRecord::Step`] records.
+    fn takes_views(&self) -> bool {
+        false
+    }
+
+    /// One instant's samples as views, in the logger's order, at step index
+    /// `step` (time `t_ns`); called instead of [`LogSink::send`] with a
+    /// [`LogRecord::Step`] when [`LogSink::takes_views`].
+    fn send_views(&mut self, t_ns: u64, step: u64, views: &[SampleView<'_>]) {
+        let _ = (t_ns, step, views);
+    }
 }
 
 /// One robot's static description, sent before its first sample and again
@@ -339,7 +356,8 @@ struct Followed {
     /// Model of the last [`LogRecord::Robots`] record (a robot sampled less
     /// often than others may be recompiled between its snapshots).
     announced: Option<Arc<Model>>,
-    /// Kinematics scratch for the snapshot (the robot's own `data` is the step's).
+    /// Kinematics scratch for the snapshot, made when first needed: the
+    /// robot's own `data` usually holds them ([`prepare`]).
     data: Option<Data>,
     /// Contact evaluations at the snapshot (one per contact point).
     evals: Vec<ContactEval>,
@@ -609,7 +627,7 @@ fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>, due: Option
             continue;
         };
         if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
-            r.data = Some(Data::new(&sim.model));
+            r.data = None;
             r.tf = tf_plan(&sim.model, &frame_parents(&sim.model));
             r.model = Some(sim.model.clone());
         }
@@ -629,16 +647,39 @@ struct SampleJob<'a> {
     robot: &'a mut Followed,
     sim: &'a RobotSim,
     index: usize,
+    /// The robot's own `Data` holds the kinematics at the snapshot (else the
+    /// follower's scratch does).
+    cached: bool,
     out: Option<RobotSample>,
 }
 
-/// Samples every logged robot due at step index `j` and sends one record.
-/// Robots are sampled independently (each from its own snapshot and
+impl SampleJob<'_> {
+    fn view(&self) -> SampleView<'_> {
+        let r = &*self.robot;
+        SampleView {
+            robot: self.index,
+            q: &r.q,
+            v: &r.v,
+            sim: self.sim,
+            data: if self.cached {
+                &self.sim.data
+            } else {
+                r.data.as_ref().expect("prepare made the scratch")
+            },
+            evals: &r.evals,
+        }
+    }
+}
+
+/// Samples every logged robot due at step index `j` and sends one record
+/// (or, to a sink that [takes views](LogSink::takes_views), the views).
+/// Robots are prepared independently (each from its own snapshot and
 /// scratch), in parallel on the world's [`SimThreadPool`] for a herd, and
 /// collected in the logger's order, so the record does not depend on the
 /// thread count.
 fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
+    let takes_views = logger.sink.takes_views();
     let mut jobs = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
     let mut index = 0;
@@ -657,7 +698,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             if r.q.len() != sim.model.nq || r.v.len() != sim.model.nv {
                 continue;
             }
-            r.data = Some(Data::new(&sim.model));
+            r.data = None;
             r.tf = tf_plan(&sim.model, &frame_parents(&sim.model));
             r.model = Some(sim.model.clone());
         }
@@ -665,173 +706,372 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             robot: r,
             sim,
             index: i,
+            cached: false,
             out: None,
         });
     }
     let work = |job: &mut SampleJob<'_>| {
         let r = &mut *job.robot;
-        let data = r.data.as_mut().expect("snapshot made data");
-        job.out = Some(sample_robot(
-            job.index,
-            job.sim,
-            &r.q,
-            &r.v,
-            data,
-            &mut r.evals,
-            C::LINK_TRANSFORMS.then_some(&r.tf[..]),
-        ));
+        job.cached = prepare(job.sim, &r.q, &r.v, &mut r.data, &mut r.evals);
+        if !takes_views {
+            let tf = C::LINK_TRANSFORMS.then_some(&job.robot.tf[..]);
+            let sample = job.view().sample(tf);
+            job.out = Some(sample);
+        }
     };
     match world.get_resource::<SimThreadPool>() {
         Some(pool) if jobs.len() >= PARALLEL_SAMPLING_MIN_ROBOTS => pool.for_each(&mut jobs, work),
         _ => jobs.iter_mut().for_each(work),
     }
-    let samples = jobs.into_iter().filter_map(|job| job.out).collect();
     logger.last_sampled = Some(j);
-    logger.sink.send(LogRecord::Step {
-        t_ns: step_time_ns(j, dt),
-        samples,
-    });
+    let t_ns = step_time_ns(j, dt);
+    if takes_views {
+        let views: Vec<SampleView<'_>> = jobs.iter().map(SampleJob::view).collect();
+        logger.sink.send_views(t_ns, j, &views);
+        return;
+    }
+    let samples = jobs.into_iter().filter_map(|job| job.out).collect();
+    logger.sink.send(LogRecord::Step { t_ns, samples });
 }
 
-/// One robot's sample from the snapshot `(q, v)` at `t_j` and what the
-/// simulation computed at `t_j` (observation, contact states, command).
+/// Makes the kinematics (with velocities) at the snapshot `(q, v)` available
+/// and evaluates every contact there into `evals`, with the contact states
+/// the step used. Returns whether the robot's own `Data` holds those
+/// kinematics: a semi-implicit Euler step leaves in it the kinematics of its
+/// only derivative evaluation, at its start state, which is the snapshot
+/// (the kinematics cache's key, `q` and `v` bit for bit, says whether it
+/// does). Otherwise (RK4's last stage; a state changed between the snapshot
+/// and the step) forward kinematics runs in `scratch`. Either way the values
+/// are the same bit for bit: the same function at the same state.
 ///
-/// The contact forces are evaluated with the engine's contact model at the
-/// snapshot and the contact states the step used: the very forces of the
-/// step's first derivative evaluation (the only one for semi-implicit Euler,
-/// RK4's first stage), not the states' own `force_n`, which the `Contact`
-/// stage computed before moving the anchors of slipping feet.
-fn sample_robot(
-    index: usize,
+/// The contact evaluations are the very forces of the step's first
+/// derivative evaluation (the only one for semi-implicit Euler, RK4's first
+/// stage), not the states' own `force_n`, which the `Contact` stage computed
+/// before moving the anchors of slipping feet.
+fn prepare(
     sim: &RobotSim,
     q: &[f64],
     v: &[f64],
-    data: &mut Data,
+    scratch: &mut Option<Data>,
     evals: &mut Vec<ContactEval>,
-    tf: Option<&[TfFrame]>,
-) -> RobotSample {
+) -> bool {
     let model = &sim.model;
-    forward_kinematics(model, data, q, v);
-    let contact = &sim.contact;
-    evals.clear();
-    evals.resize(contact.points.len(), ContactEval::default());
-    data.clear_external_forces();
-    contact_forces(
-        &contact.points,
-        model,
-        data,
-        &contact.terrain,
-        &contact.states,
-        Some(evals),
-    );
-    let base = data.pose[0];
-    let base_orientation = if model.is_floating() {
-        DQuat::from_xyzw(q[3], q[4], q[5], q[6]).normalize()
+    let cached = sim.data.kinematics_hold(model, q, v);
+    let data = if cached {
+        &sim.data
     } else {
-        DQuat::from_mat3(&base.rot)
+        let d = scratch.get_or_insert_with(|| Data::new(model));
+        forward_kinematics(model, d, q, v);
+        &*d
     };
-    let obs = &sim.run.observation;
-    let nv0 = model.base_nv();
-    let nq0 = model.base_nq();
-    let command = &sim.tau_actuator[nv0..model.actuated_nv()];
-    let saturate = sim.workspace.passive.saturation;
-    let effort = command
+    let c = &sim.contact;
+    evals.clear();
+    evals.extend(
+        c.points
+            .iter()
+            .zip(&c.states)
+            .map(|(p, s)| evaluate(p, data, &c.terrain, s)),
+    );
+    cached
+}
+
+/// Calls `f` with views of `robots` (root entities, each with the `(q, v)`
+/// to view it at; a view's `robot` is its position in the list), their
+/// kinematics and contact evaluations computed afresh in scratch, never read
+/// from the robots' kinematics caches; the rest (observation, contact
+/// states, command, controller) is the robot's as it stands. A reference for
+/// checks of the sampling (call it after the step from `(q, v)`), and views
+/// for benchmarks. Robots without a simulation are left out.
+pub fn with_fresh_views<R>(
+    world: &World,
+    robots: &[(Entity, &[f64], &[f64])],
+    f: impl FnOnce(&[SampleView<'_>]) -> R,
+) -> R {
+    let prepared: Vec<_> = robots
         .iter()
-        .zip(&model.effort_limit[nv0..])
-        .map(|(&t, &lim)| if saturate { t.clamp(-lim, lim) } else { t })
-        .collect();
-    let targets = match &sim.run.controller {
-        Controller::None => None,
-        c => c.joint_targets().map(<[f64]>::to_vec),
-    };
-    let velocity_targets = match &sim.run.controller {
-        Controller::External(e) => Some(e.target_radps.clone()),
-        _ => targets.as_ref().map(|t| vec![0.0; t.len()]),
-    };
-    let walker = match &sim.run.controller {
-        Controller::Walker(w) => Some(w),
-        _ => None,
-    };
-    let virtual_wrench = walker.map(|w| {
-        let f = w.wrench();
-        (f.lin, f.ang)
-    });
-    // Newton's second law for the CoM with the forces acting at this instant.
-    let mut f_ext = DVec3::ZERO;
-    for e in evals.iter().filter(|e| e.active) {
-        f_ext += e.force_n();
-    }
-    let t = sim.contact.time_s;
-    for p in &sim.contact.pushes {
-        if t >= p.start_s && t < p.end_s {
-            f_ext += p.force_n;
-        }
-    }
-    let com_acc = model.gravity + f_ext / model.total_mass;
-    let feet = (0..sim.run.n_feet.min(evals.len()))
-        .map(|i| {
-            let e = &evals[i];
-            let p = &contact.points[i];
-            FootLog {
-                in_contact: e.active,
-                slipping: e.active && e.slipping,
-                penetration_m: if e.active { e.depth_m } else { 0.0 },
-                normal_force_n: if e.active { e.normal_force_n } else { 0.0 },
-                force_n: if e.active { e.force_n() } else { DVec3::ZERO },
-                position_m: if e.active {
-                    e.application_m
-                } else {
-                    data.body_point_world(p.body, p.point_in_body) - DVec3::Z * p.radius_m
-                },
-                // the walker has one leg per foot, in the model's foot order
-                gait_phase: walker
-                    .map(|w| w.scheduler().legs())
-                    .and_then(|legs| legs.get(i))
-                    .map(|l| l.clock_phase),
-            }
+        .enumerate()
+        .filter_map(|(i, &(entity, q, v))| {
+            let sim = robot_sim(world, entity)?;
+            let mut data = Data::new(&sim.model);
+            forward_kinematics(&sim.model, &mut data, q, v);
+            let c = &sim.contact;
+            let evals: Vec<_> = c
+                .points
+                .iter()
+                .zip(&c.states)
+                .map(|(p, s)| evaluate(p, &data, &c.terrain, s))
+                .collect();
+            Some((i, q, v, sim, data, evals))
         })
         .collect();
-    RobotSample {
-        robot: index,
-        q: q.to_vec(),
-        v: v.to_vec(),
-        base_position_m: base.trans,
-        base_orientation,
-        base_linear_mps: data.vel[0].lin,
-        base_angular_radps: data.vel[0].ang,
-        rpy_rad: rpy_from_rot(base.rot),
-        com_m: obs.com_m,
-        com_velocity_mps: obs.com_velocity_mps,
-        com_acceleration_mps2: com_acc,
-        joint_position: q[nq0..model.actuated_nq()].to_vec(),
-        joint_velocity: v[nv0..model.actuated_nv()].to_vec(),
-        joint_effort: effort,
-        joint_effort_command: command.to_vec(),
-        joint_position_desired: targets,
-        joint_velocity_desired: velocity_targets,
-        feet,
-        virtual_wrench,
-        sensing: sim.sensing.as_deref().map(|x| SensingLog {
-            imu: x
-                .suite
-                .imu
-                .as_ref()
-                .and_then(|i| i.last)
-                .map(|m| (m.accel_mps2, m.gyro_radps)),
-            encoder_position_rad: x.suite.encoders.as_ref().map(|e| e.position_rad.clone()),
-            encoder_velocity_radps: x.suite.encoders.as_ref().map(|e| e.velocity_radps.clone()),
-            contact: x.contacts.clone(),
-            estimate: x.estimator.as_ref().map(|e| e.estimate),
-            contact_force_n: x
-                .suite
-                .contacts
-                .as_ref()
-                .filter(|c| c.params.force_output)
-                .map(|c| c.force_n.clone()),
-            mocap: x.suite.mocap.as_ref().and_then(|m| m.last),
-        }),
-        link_transforms: tf.map_or_else(Vec::new, |p| {
-            link_transforms(model, data, q, base_orientation, p)
-        }),
+    let views: Vec<_> = prepared
+        .iter()
+        .map(|(i, q, v, sim, data, evals)| SampleView {
+            robot: *i,
+            q,
+            v,
+            sim,
+            data,
+            evals,
+        })
+        .collect();
+    f(&views)
+}
+
+/// One robot at the instant `t_j` of a sample, borrowed from the simulation
+/// and the sampler: everything a [`RobotSample`] holds, without a copy or an
+/// allocation. The log's sample is made from it ([`SampleView::to_sample`]);
+/// the live monitor writes its frames straight from views
+/// ([`LogSink::send_views`]), so both carry the same values bit for bit.
+/// Frames as in [`RobotSample`].
+#[derive(Clone, Copy, Debug)]
+pub struct SampleView<'a> {
+    /// Index of the robot in the last [`LogRecord::Robots`] list.
+    pub robot: usize,
+    /// Generalised position at `t_j` (the sampler's snapshot, nq).
+    pub q: &'a [f64],
+    /// Generalised velocity at `t_j` (nv).
+    pub v: &'a [f64],
+    /// The robot as the step from `t_j` left it: model, observation (CoM),
+    /// contact states, actuator command, controller, sensors.
+    pub sim: &'a RobotSim,
+    /// Kinematics with velocities at `(q, v)`.
+    pub data: &'a Data,
+    /// Every contact point's evaluation at `(q, v)` with the states the step used.
+    pub evals: &'a [ContactEval],
+}
+
+/// Desired joint velocities of a controller with joint targets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum VelocityTargets<'a> {
+    /// The external controller's (rad/s).
+    Given(&'a [f64]),
+    /// Zero for each of this many joint targets (the target is held still).
+    Zero(usize),
+}
+
+impl VelocityTargets<'_> {
+    /// As a vector (rad/s).
+    pub fn to_vec(&self) -> Vec<f64> {
+        match *self {
+            VelocityTargets::Given(v) => v.to_vec(),
+            VelocityTargets::Zero(n) => vec![0.0; n],
+        }
+    }
+}
+
+impl<'a> SampleView<'a> {
+    /// The robot's model.
+    #[inline]
+    pub fn model(&self) -> &'a Model {
+        &self.sim.model
+    }
+
+    /// Base position in the world (m).
+    #[inline]
+    pub fn base_position_m(&self) -> DVec3 {
+        self.data.pose[0].trans
+    }
+
+    /// Base orientation (base → world, unit quaternion).
+    #[inline]
+    pub fn base_orientation(&self) -> DQuat {
+        let q = self.q;
+        if self.model().is_floating() {
+            DQuat::from_xyzw(q[3], q[4], q[5], q[6]).normalize()
+        } else {
+            DQuat::from_mat3(&self.data.pose[0].rot)
+        }
+    }
+
+    /// Velocity of the base origin (m/s, world axes).
+    #[inline]
+    pub fn base_linear_mps(&self) -> DVec3 {
+        self.data.vel[0].lin
+    }
+
+    /// Angular velocity of the base (rad/s, world axes).
+    #[inline]
+    pub fn base_angular_radps(&self) -> DVec3 {
+        self.data.vel[0].ang
+    }
+
+    /// Roll, pitch, yaw of the base (rad; `R = Rz(yaw) Ry(pitch) Rx(roll)`).
+    #[inline]
+    pub fn rpy_rad(&self) -> DVec3 {
+        rpy_from_rot(self.data.pose[0].rot)
+    }
+
+    /// Whole-body centre of mass (m, world), as the `Contact` stage observed it.
+    #[inline]
+    pub fn com_m(&self) -> DVec3 {
+        self.sim.run.observation.com_m
+    }
+
+    /// CoM velocity (m/s, world).
+    #[inline]
+    pub fn com_velocity_mps(&self) -> DVec3 {
+        self.sim.run.observation.com_velocity_mps
+    }
+
+    /// Joint angles (rad), actuated joints in velocity order.
+    #[inline]
+    pub fn joint_position(&self) -> &'a [f64] {
+        let m = self.model();
+        &self.q[m.base_nq()..m.actuated_nq()]
+    }
+
+    /// Joint velocities (rad/s).
+    #[inline]
+    pub fn joint_velocity(&self) -> &'a [f64] {
+        let m = self.model();
+        &self.v[m.base_nv()..m.actuated_nv()]
+    }
+
+    /// The controller's command before saturation (N·m).
+    #[inline]
+    pub fn joint_effort_command(&self) -> &'a [f64] {
+        let m = self.model();
+        &self.sim.tau_actuator[m.base_nv()..m.actuated_nv()]
+    }
+
+    /// Actuator torques that act over the step (N·m): the command after saturation.
+    #[inline]
+    pub fn joint_effort(&self) -> impl ExactSizeIterator<Item = f64> + 'a {
+        let m = self.model();
+        let saturate = self.sim.workspace.passive.saturation;
+        self.joint_effort_command()
+            .iter()
+            .zip(&m.effort_limit[m.base_nv()..])
+            .map(move |(&t, &lim)| if saturate { t.clamp(-lim, lim) } else { t })
+    }
+
+    /// Joint targets of the controller (rad), when it tracks some.
+    #[inline]
+    pub fn joint_position_desired(&self) -> Option<&'a [f64]> {
+        self.sim.run.controller.joint_targets()
+    }
+
+    /// Desired joint velocities, when the controller has joint targets.
+    #[inline]
+    pub fn joint_velocity_desired(&self) -> Option<VelocityTargets<'a>> {
+        match &self.sim.run.controller {
+            Controller::External(e) => Some(VelocityTargets::Given(&e.target_radps)),
+            _ => self
+                .joint_position_desired()
+                .map(|t| VelocityTargets::Zero(t.len())),
+        }
+    }
+
+    /// Feet sampled (the model's first feet).
+    #[inline]
+    pub fn feet(&self) -> usize {
+        self.sim.run.n_feet.min(self.evals.len())
+    }
+
+    /// Foot `i < feet()` (world frame).
+    #[inline]
+    pub fn foot(&self, i: usize) -> FootLog {
+        let e = &self.evals[i];
+        let p = &self.sim.contact.points[i];
+        FootLog {
+            in_contact: e.active,
+            slipping: e.active && e.slipping,
+            penetration_m: if e.active { e.depth_m } else { 0.0 },
+            normal_force_n: if e.active { e.normal_force_n } else { 0.0 },
+            force_n: if e.active { e.force_n() } else { DVec3::ZERO },
+            position_m: if e.active {
+                e.application_m
+            } else {
+                self.data.body_point_world(p.body, p.point_in_body) - DVec3::Z * p.radius_m
+            },
+            // the walker has one leg per foot, in the model's foot order
+            gait_phase: self
+                .walker()
+                .and_then(|w| w.scheduler().legs().get(i))
+                .map(|l| l.clock_phase),
+        }
+    }
+
+    #[inline]
+    fn walker(&self) -> Option<&'a quadsim_engine::control::walker::Walker> {
+        match &self.sim.run.controller {
+            Controller::Walker(w) => Some(w),
+            _ => None,
+        }
+    }
+
+    /// The log's sample (with every link frame's transform when
+    /// `link_transforms`).
+    pub fn to_sample(&self, link_transforms: bool) -> RobotSample {
+        let plan = link_transforms.then(|| {
+            let m = self.model();
+            tf_plan(m, &frame_parents(m))
+        });
+        self.sample(plan.as_deref())
+    }
+
+    fn sample(&self, tf: Option<&[TfFrame]>) -> RobotSample {
+        let (model, sim, q, v) = (self.model(), self.sim, self.q, self.v);
+        let base_orientation = self.base_orientation();
+        let virtual_wrench = self.walker().map(|w| {
+            let f = w.wrench();
+            (f.lin, f.ang)
+        });
+        // Newton's second law for the CoM with the forces acting at this instant.
+        let mut f_ext = DVec3::ZERO;
+        for e in self.evals.iter().filter(|e| e.active) {
+            f_ext += e.force_n();
+        }
+        let t = sim.contact.time_s;
+        for p in &sim.contact.pushes {
+            if t >= p.start_s && t < p.end_s {
+                f_ext += p.force_n;
+            }
+        }
+        let com_acc = model.gravity + f_ext / model.total_mass;
+        RobotSample {
+            robot: self.robot,
+            q: q.to_vec(),
+            v: v.to_vec(),
+            base_position_m: self.base_position_m(),
+            base_orientation,
+            base_linear_mps: self.base_linear_mps(),
+            base_angular_radps: self.base_angular_radps(),
+            rpy_rad: self.rpy_rad(),
+            com_m: self.com_m(),
+            com_velocity_mps: self.com_velocity_mps(),
+            com_acceleration_mps2: com_acc,
+            joint_position: self.joint_position().to_vec(),
+            joint_velocity: self.joint_velocity().to_vec(),
+            joint_effort: self.joint_effort().collect(),
+            joint_effort_command: self.joint_effort_command().to_vec(),
+            joint_position_desired: self.joint_position_desired().map(<[f64]>::to_vec),
+            joint_velocity_desired: self.joint_velocity_desired().map(|t| t.to_vec()),
+            feet: (0..self.feet()).map(|i| self.foot(i)).collect(),
+            virtual_wrench,
+            sensing: sim.sensing.as_deref().map(|x| SensingLog {
+                imu: x
+                    .suite
+                    .imu
+                    .as_ref()
+                    .and_then(|i| i.last)
+                    .map(|m| (m.accel_mps2, m.gyro_radps)),
+                encoder_position_rad: x.suite.encoders.as_ref().map(|e| e.position_rad.clone()),
+                encoder_velocity_radps: x.suite.encoders.as_ref().map(|e| e.velocity_radps.clone()),
+                contact: x.contacts.clone(),
+                estimate: x.estimator.as_ref().map(|e| e.estimate),
+                contact_force_n: x
+                    .suite
+                    .contacts
+                    .as_ref()
+                    .filter(|c| c.params.force_output)
+                    .map(|c| c.force_n.clone()),
+                mocap: x.suite.mocap.as_ref().and_then(|m| m.last),
+            }),
+            link_transforms: tf.map_or_else(Vec::new, |p| {
+                link_transforms(model, self.data, q, base_orientation, p)
+            }),
+        }
     }
 }

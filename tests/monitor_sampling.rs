@@ -1,0 +1,173 @@
+//! The sampling behind the log and the live monitor reads the kinematics the
+//! step left in each robot's `Data` instead of computing them again
+//! (`quadsim_systems::log`, `prepare`), and the monitor writes its frames
+//! straight from borrowed views. Over trotting runs, every sample and every
+//! frame must equal, bit for bit, one computed afresh at the sampled state
+//! (`with_fresh_views`: forward kinematics and contact evaluations in
+//! scratch). With semi-implicit Euler the robot's own kinematics must hold
+//! the sampled state at every sample (else the saving is lost); with RK4
+//! they never do, and the sampler's own forward kinematics is checked.
+
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use bevy_ecs::entity::Entity;
+use quadsim::cli::bench::herd_scenario;
+use quadsim::monitor::RobotFrame;
+use quadsim::scenario::parse_scenario;
+use quadsim::systems::{
+    LogChannel, LogRecord, LogSink, MonitorChannel, RobotSample, SampleView, finish_sampling,
+    start_sampling, with_fresh_views,
+};
+use quadsim::world::{Overrides, World, build_world};
+
+/// Steps between samples (the controller period at 2 kHz).
+const EVERY: u64 = 4;
+
+/// One instant's log record: time (ns) and samples.
+type Instant = (u64, Vec<RobotSample>);
+
+/// Keeps the log channel's samples of every instant.
+struct Samples(Arc<Mutex<Vec<Instant>>>);
+impl LogSink for Samples {
+    fn send(&mut self, record: LogRecord) {
+        if let LogRecord::Step { t_ns, samples } = record {
+            self.0.lock().unwrap().push((t_ns, samples));
+        }
+    }
+}
+
+/// Writes the monitor channel's views into frames kept from instant to
+/// instant (in place, as the publisher does).
+struct Frames(Arc<Mutex<(u64, Vec<RobotFrame>)>>, f64);
+impl LogSink for Frames {
+    fn send(&mut self, _: LogRecord) {}
+    fn takes_views(&self) -> bool {
+        true
+    }
+    fn send_views(&mut self, _t_ns: u64, step: u64, views: &[SampleView<'_>]) {
+        let mut got = self.0.lock().unwrap();
+        got.0 = step;
+        got.1.resize(views.len(), RobotFrame::default());
+        for (f, v) in got.1.iter_mut().zip(views) {
+            f.set_from_view(v, step, step as f64 * self.1);
+        }
+    }
+}
+
+fn trot() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/trot.toml"))
+        .expect("scenarios/trot.toml")
+}
+
+fn world(src: &str) -> World {
+    let scn = parse_scenario(Path::new("test.toml"), src.to_string()).expect("parses");
+    build_world(&scn, Overrides::default()).expect("builds")
+}
+
+fn state(w: &World, e: Entity) -> (Vec<f64>, Vec<f64>) {
+    let sim = w.sim.robot(e).expect("compiled");
+    (sim.state.q.clone(), sim.state.v.clone())
+}
+
+/// Runs `steps` steps sampling both channels every [`EVERY`] steps and
+/// compares each instant with a fresh computation at the state the step
+/// started from. Returns how many robot-samples found the robot's own
+/// kinematics at that state.
+fn check(w: &mut World, steps: u64) -> (usize, usize) {
+    let robots: Vec<Entity> = w.robots.iter().map(|(_, e)| *e).collect();
+    let followed: Vec<(Entity, bool)> = robots.iter().map(|&e| (e, true)).collect();
+    let samples = Arc::new(Mutex::new(Vec::new()));
+    let frames = Arc::new(Mutex::new((u64::MAX, Vec::new())));
+    start_sampling::<LogChannel>(
+        &mut w.sim.world,
+        Box::new(Samples(samples.clone())),
+        EVERY,
+        &followed,
+    );
+    start_sampling::<MonitorChannel>(
+        &mut w.sim.world,
+        Box::new(Frames(frames.clone(), w.dt_s)),
+        EVERY,
+        &followed,
+    );
+    let (mut checked, mut held) = (0, 0);
+    for j in 0..steps {
+        let before: Vec<_> = robots.iter().map(|&e| state(w, e)).collect();
+        w.sim.run(1);
+        if !j.is_multiple_of(EVERY) {
+            continue;
+        }
+        let at: Vec<(Entity, &[f64], &[f64])> = robots
+            .iter()
+            .zip(&before)
+            .map(|(&e, (q, v))| (e, &q[..], &v[..]))
+            .collect();
+        let logged = samples.lock().unwrap().pop().expect("a sample per instant");
+        let published = frames.lock().unwrap().clone();
+        assert_eq!(logged.0, (j as f64 * w.dt_s * 1e9).round() as u64);
+        assert_eq!(published.0, j);
+        with_fresh_views(&w.sim.world, &at, |views| {
+            assert_eq!(views.len(), robots.len());
+            for (k, view) in views.iter().enumerate() {
+                let fresh = view.to_sample(true);
+                assert_eq!(
+                    format!("{fresh:?}"),
+                    format!("{:?}", logged.1[k]),
+                    "log sample of robot {k} at step {j}"
+                );
+                let frame = RobotFrame::from_sample(&fresh, j, j as f64 * w.dt_s);
+                assert_eq!(
+                    format!("{frame:?}"),
+                    format!("{:?}", published.1[k]),
+                    "frame of robot {k} at step {j}"
+                );
+                checked += 1;
+                let sim = w.sim.robot(robots[k]).unwrap();
+                held += usize::from(sim.data.kinematics_hold(&sim.model, view.q, view.v));
+            }
+        });
+    }
+    drop(finish_sampling::<MonitorChannel>(&mut w.sim.world, false));
+    drop(finish_sampling::<LogChannel>(&mut w.sim.world, false));
+    (checked, held)
+}
+
+/// One quad16 trotting (`scenarios/trot.toml`, semi-implicit Euler) for
+/// 0.5 s: every sample reads the step's own kinematics and equals a fresh one.
+#[test]
+fn trot_samples_from_the_step_equal_fresh_ones() {
+    let src = trot();
+    let mut w = world(&src);
+    let (checked, held) = check(&mut w, 1000);
+    assert_eq!(checked, 250);
+    assert_eq!(
+        held, checked,
+        "the step's kinematics hold every sampled state"
+    );
+}
+
+/// Eight trotting quad16 stepped four at a time in SIMD lanes.
+#[test]
+fn herd_in_lanes_samples_equal_fresh_ones() {
+    let mut w = world(&herd_scenario("quad16", 8).unwrap());
+    let (checked, held) = check(&mut w, 300);
+    assert_eq!(checked, 8 * 75);
+    assert_eq!(held, checked);
+}
+
+/// RK4 leaves its last stage's kinematics in `Data`: the sampler computes
+/// them itself, and still equals a fresh computation.
+#[test]
+fn rk4_samples_computed_again_equal_fresh_ones() {
+    let src = trot();
+    let src = src.replace(
+        "integrator = \"semi_implicit_euler\"",
+        "integrator = \"rk4\"",
+    );
+    assert!(src.contains("\"rk4\""));
+    let mut w = world(&src);
+    let (checked, held) = check(&mut w, 400);
+    assert_eq!(checked, 100);
+    assert_eq!(held, 0, "RK4's last stage is not the sampled state");
+}
