@@ -16,7 +16,7 @@ use quadsim_engine::aba::aba;
 use quadsim_engine::batch::{BatchData, aba_batch, aba_batch_generic};
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::{Data, Model};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 
@@ -31,25 +31,7 @@ fn setup() -> (Model, Vec<Inputs>) {
     let model = Model::from_description(&desc, BaseKind::Floating).expect("quad16 compiles");
     let mut r = ChaCha8Rng::seed_from_u64(42);
     let robots = (0..ROBOTS)
-        .map(|_| {
-            let mut q = model.neutral_q();
-            let axis = glam::DVec3::new(
-                r.random_range(-1.0..1.0),
-                r.random_range(-1.0..1.0),
-                r.random_range(-1.0..1.0),
-            )
-            .normalize();
-            let quat = glam::DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
-            q[..7].copy_from_slice(&[0.1, -0.2, 0.5, quat.x, quat.y, quat.z, quat.w]);
-            for x in &mut q[7..] {
-                *x = r.random_range(-1.5..1.5);
-            }
-            let v: Vec<f64> = (0..model.nv)
-                .map(|k| r.random_range(-1.0..1.0) * if k < 6 { 1.0 } else { 2.0 })
-                .collect();
-            let tau: Vec<f64> = (0..model.nv).map(|_| r.random_range(-10.0..10.0)).collect();
-            (q, v, tau)
-        })
+        .map(|_| quadsim_engine::robots::benchmark_state(&model, &mut r))
         .collect();
     (model, robots)
 }

@@ -23,23 +23,7 @@ fn setup() -> (Model, State, Vec<f64>, Vec<f64>) {
     let desc = quadsim_engine::robots::builtin("quad16").expect("built-in quad16");
     let model = Model::from_description(&desc, BaseKind::Floating).expect("quad16 compiles");
     let mut r = ChaCha8Rng::seed_from_u64(42);
-    let mut q = model.neutral_q();
-    let mut v = vec![0.0; model.nv];
-    let axis = glam::DVec3::new(
-        r.random_range(-1.0..1.0),
-        r.random_range(-1.0..1.0),
-        r.random_range(-1.0..1.0),
-    )
-    .normalize();
-    let quat = glam::DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
-    q[..7].copy_from_slice(&[0.1, -0.2, 0.5, quat.x, quat.y, quat.z, quat.w]);
-    for x in &mut q[7..] {
-        *x = r.random_range(-1.5..1.5);
-    }
-    for (k, x) in v.iter_mut().enumerate() {
-        *x = r.random_range(-1.0..1.0) * if k < 6 { 1.0 } else { 2.0 };
-    }
-    let tau: Vec<f64> = (0..model.nv).map(|_| r.random_range(-10.0..10.0)).collect();
+    let (q, v, tau) = quadsim_engine::robots::benchmark_state(&model, &mut r);
     let a: Vec<f64> = (0..model.nv).map(|_| r.random_range(-3.0..3.0)).collect();
     (model, State { q, v }, tau, a)
 }

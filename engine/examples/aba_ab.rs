@@ -7,7 +7,7 @@
 use quadsim_engine::aba::aba;
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::{Data, Model};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 use std::time::Instant;
@@ -20,23 +20,7 @@ fn main() {
     general.leg_lanes = None;
     // the benchmark's state (engine/benches/dynamics.rs)
     let mut r = ChaCha8Rng::seed_from_u64(42);
-    let mut q = fast.neutral_q();
-    let mut v = vec![0.0; fast.nv];
-    let axis = glam::DVec3::new(
-        r.random_range(-1.0..1.0),
-        r.random_range(-1.0..1.0),
-        r.random_range(-1.0..1.0),
-    )
-    .normalize();
-    let quat = glam::DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
-    q[..7].copy_from_slice(&[0.1, -0.2, 0.5, quat.x, quat.y, quat.z, quat.w]);
-    for x in &mut q[7..] {
-        *x = r.random_range(-1.5..1.5);
-    }
-    for (k, x) in v.iter_mut().enumerate() {
-        *x = r.random_range(-1.0..1.0) * if k < 6 { 1.0 } else { 2.0 };
-    }
-    let tau: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-10.0..10.0)).collect();
+    let (q, v, tau) = quadsim_engine::robots::benchmark_state(&fast, &mut r);
     let mut df = Data::new(&fast);
     let mut dg = Data::new(&general);
     let a = aba(&fast, &mut df, &q, &v, &tau).to_vec();

@@ -192,3 +192,29 @@ pub fn nominal_q(name: &str) -> Option<Vec<f64>> {
     q.extend(nominal_stance(name)?);
     Some(q)
 }
+
+/// The benchmarks' random state of a floating-base `model` (its `q`, `v`
+/// and joint-space `τ`): base at (0.1, −0.2, 0.5) m with a random unit
+/// quaternion, joints in ±1.5 rad, base velocities in ±1 m/s and ±1 rad/s,
+/// joint velocities in ±2 rad/s, torques in ±10 N·m. One definition, so the
+/// criterion benches and the A/B example time the same states, drawn from
+/// `r` in this order.
+pub fn benchmark_state(model: &Model, r: &mut impl rand::Rng) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut q = model.neutral_q();
+    let axis = DVec3::new(
+        r.random_range(-1.0..1.0),
+        r.random_range(-1.0..1.0),
+        r.random_range(-1.0..1.0),
+    )
+    .normalize();
+    let quat = glam::DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
+    q[..7].copy_from_slice(&[0.1, -0.2, 0.5, quat.x, quat.y, quat.z, quat.w]);
+    for x in &mut q[7..] {
+        *x = r.random_range(-1.5..1.5);
+    }
+    let v: Vec<f64> = (0..model.nv)
+        .map(|k| r.random_range(-1.0..1.0) * if k < 6 { 1.0 } else { 2.0 })
+        .collect();
+    let tau: Vec<f64> = (0..model.nv).map(|_| r.random_range(-10.0..10.0)).collect();
+    (q, v, tau)
+}
