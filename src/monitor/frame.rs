@@ -8,7 +8,7 @@
 #![allow(unsafe_code)]
 
 use iceoryx2::prelude::ZeroCopySend;
-use quadsim_systems::{RobotSample, SampleView, VelocityTargets};
+use quadsim_systems::{FootLog, RobotSample, SampleView, VelocityTargets};
 
 /// Version of [`RobotFrame`]'s layout; bump it (and the type name's `v1`)
 /// on any change of field, order or size.
@@ -150,6 +150,31 @@ impl RobotFrame {
         }
     }
 
+    /// Writes the feet's contact and slip flags, forces and gait phases
+    /// (at most [`MAX_FEET`]), and NaN in the slots beyond them that the
+    /// previous frame (`old_feet` feet) used.
+    #[inline]
+    fn set_feet(&mut self, feet: impl Iterator<Item = FootLog>, old_feet: usize) {
+        self.contact_flags = 0;
+        self.slip_flags = 0;
+        let mut n_feet = 0;
+        for (i, foot) in feet.enumerate() {
+            if foot.in_contact {
+                self.contact_flags |= 1 << i;
+            }
+            if foot.slipping {
+                self.slip_flags |= 1 << i;
+            }
+            self.foot_force_n[i] = foot.force_n.to_array();
+            self.gait_phase[i] = foot.gait_phase.unwrap_or(f64::NAN);
+            n_feet = i + 1;
+        }
+        for i in n_feet..old_feet.max(n_feet).min(MAX_FEET) {
+            self.foot_force_n[i] = [f64::NAN; 3];
+            self.gait_phase[i] = f64::NAN;
+        }
+    }
+
     /// Makes `self` the frame of the sampled instant `view` (step `tick`,
     /// time `time_s`) in place, whatever frame it held (of this robot or
     /// another), writing only what the frame carries: equal bit for bit to
@@ -203,24 +228,8 @@ impl RobotFrame {
             s.joint_effort_command(),
             old_dof,
         );
-        self.contact_flags = 0;
-        self.slip_flags = 0;
         let n_feet = n_feet.min(MAX_FEET);
-        for i in 0..n_feet {
-            let foot = s.foot(i);
-            if foot.in_contact {
-                self.contact_flags |= 1 << i;
-            }
-            if foot.slipping {
-                self.slip_flags |= 1 << i;
-            }
-            self.foot_force_n[i] = foot.force_n.to_array();
-            self.gait_phase[i] = foot.gait_phase.unwrap_or(f64::NAN);
-        }
-        for i in n_feet..old_feet.max(n_feet).min(MAX_FEET) {
-            self.foot_force_n[i] = [f64::NAN; 3];
-            self.gait_phase[i] = f64::NAN;
-        }
+        self.set_feet((0..n_feet).map(|i| s.foot(i)), old_feet);
     }
 
     /// Makes `self` equal to [`Self::from_sample`]`(s, tick, time_s)` in
@@ -228,7 +237,7 @@ impl RobotFrame {
     /// [`Self::set_from_view`] does from a view.
     pub fn set_from_sample(&mut self, s: &RobotSample, tick: u64, time_s: f64) {
         let (old_dof, old_feet) = self.old_counts();
-        let (all_dof, all_feet) = (MAX_DOF, MAX_FEET);
+        let all_dof = MAX_DOF;
         self.layout_version = LAYOUT_VERSION;
         self.robot_index = s.robot as u32;
         self.tick = tick;
@@ -264,23 +273,7 @@ impl RobotFrame {
             &s.joint_effort_command,
             old_dof,
         );
-        self.contact_flags = 0;
-        self.slip_flags = 0;
-        let n_feet = s.feet.len().min(MAX_FEET);
-        for (i, foot) in s.feet.iter().take(MAX_FEET).enumerate() {
-            if foot.in_contact {
-                self.contact_flags |= 1 << i;
-            }
-            if foot.slipping {
-                self.slip_flags |= 1 << i;
-            }
-            self.foot_force_n[i] = foot.force_n.to_array();
-            self.gait_phase[i] = foot.gait_phase.unwrap_or(f64::NAN);
-        }
-        for i in n_feet..old_feet.max(n_feet).min(all_feet) {
-            self.foot_force_n[i] = [f64::NAN; 3];
-            self.gait_phase[i] = f64::NAN;
-        }
+        self.set_feet(s.feet.iter().take(MAX_FEET).cloned(), old_feet);
     }
 
     /// The joints carried (`min(n_dof, MAX_DOF)`).
