@@ -91,41 +91,7 @@ pub(crate) struct KinematicsKey {
 impl Data {
     /// Allocates the workspace for `model`.
     pub fn new(model: &Model) -> Data {
-        let nb = model.nbodies;
-        let nv = model.nv;
-        let leg_groups = model.leg_lanes.as_ref().map_or(0, |p| p.groups.len());
-        Data {
-            origin: DVec3::ZERO,
-            pose: vec![Transform::IDENTITY; nb],
-            vel: vec![Motion::ZERO; nb],
-            s: vec![Motion::ZERO; nb],
-            s_base: [Motion::ZERO; 6],
-            inertia_ref: vec![RigidInertia::ZERO; nb],
-            acc: vec![Motion::ZERO; nb],
-            f: vec![Force::ZERO; nb],
-            f_ext: vec![Force::ZERO; nb],
-            ia: vec![Sym6::ZERO; nb],
-            pa: vec![Force::ZERO; nb],
-            u: vec![Force::ZERO; nb],
-            d_inv: vec![0.0; nb],
-            u_tau: vec![0.0; nb],
-            c: vec![Motion::ZERO; nb],
-            leg_aba: vec![GroupAba::default(); leg_groups],
-            leg_kin: vec![GroupKin::default(); leg_groups],
-            ddq: vec![0.0; nv],
-            tau: vec![0.0; nv],
-            mass_matrix: vec![0.0; nv * nv],
-            nle: vec![0.0; nv],
-            gravity: vec![0.0; nv],
-            jacobian: vec![0.0; 3 * nv],
-            scratch_v: vec![0.0; nv],
-            kin: KinematicsKey {
-                model: 0,
-                q: vec![0.0; model.nq],
-                v: vec![0.0; nv],
-                level: 0,
-            },
-        }
+        Data::allocate(model, true)
     }
 
     /// A workspace for [`crate::kinematics::forward_kinematics`] and the
@@ -134,8 +100,18 @@ impl Data {
     /// dynamics algorithms must not be run on it. For state estimators,
     /// which need a second copy of a robot's kinematics and nothing else.
     pub fn for_kinematics(model: &Model) -> Data {
+        Data::allocate(model, false)
+    }
+
+    /// The kinematic fields always; the dynamics arrays when `dynamics`.
+    fn allocate(model: &Model, dynamics: bool) -> Data {
         let nb = model.nbodies;
         let nv = model.nv;
+        let leg_groups = model.leg_lanes.as_ref().map_or(0, |p| p.groups.len());
+        // `n` elements of `x` with the dynamics, none without
+        fn dyn_vec<T: Clone>(dynamics: bool, x: T, n: usize) -> Vec<T> {
+            if dynamics { vec![x; n] } else { Vec::new() }
+        }
         Data {
             origin: DVec3::ZERO,
             pose: vec![Transform::IDENTITY; nb],
@@ -143,28 +119,25 @@ impl Data {
             s: vec![Motion::ZERO; nb],
             s_base: [Motion::ZERO; 6],
             inertia_ref: vec![RigidInertia::ZERO; nb],
-            acc: Vec::new(),
-            f: Vec::new(),
-            f_ext: Vec::new(),
-            ia: Vec::new(),
-            pa: Vec::new(),
-            u: Vec::new(),
-            d_inv: Vec::new(),
-            u_tau: Vec::new(),
-            c: Vec::new(),
-            leg_aba: Vec::new(),
+            acc: dyn_vec(dynamics, Motion::ZERO, nb),
+            f: dyn_vec(dynamics, Force::ZERO, nb),
+            f_ext: dyn_vec(dynamics, Force::ZERO, nb),
+            ia: dyn_vec(dynamics, Sym6::ZERO, nb),
+            pa: dyn_vec(dynamics, Force::ZERO, nb),
+            u: dyn_vec(dynamics, Force::ZERO, nb),
+            d_inv: dyn_vec(dynamics, 0.0, nb),
+            u_tau: dyn_vec(dynamics, 0.0, nb),
+            c: dyn_vec(dynamics, Motion::ZERO, nb),
+            leg_aba: dyn_vec(dynamics, GroupAba::default(), leg_groups),
             // forward kinematics with the legs in lanes writes these
-            leg_kin: vec![
-                GroupKin::default();
-                model.leg_lanes.as_ref().map_or(0, |p| p.groups.len())
-            ],
-            ddq: Vec::new(),
-            tau: Vec::new(),
-            mass_matrix: Vec::new(),
-            nle: Vec::new(),
-            gravity: Vec::new(),
-            jacobian: Vec::new(),
-            scratch_v: Vec::new(),
+            leg_kin: vec![GroupKin::default(); leg_groups],
+            ddq: dyn_vec(dynamics, 0.0, nv),
+            tau: dyn_vec(dynamics, 0.0, nv),
+            mass_matrix: dyn_vec(dynamics, 0.0, nv * nv),
+            nle: dyn_vec(dynamics, 0.0, nv),
+            gravity: dyn_vec(dynamics, 0.0, nv),
+            jacobian: dyn_vec(dynamics, 0.0, 3 * nv),
+            scratch_v: dyn_vec(dynamics, 0.0, nv),
             kin: KinematicsKey {
                 model: 0,
                 q: vec![0.0; model.nq],
