@@ -368,6 +368,21 @@ struct Followed {
     v: Vec<f64>,
 }
 
+impl Followed {
+    /// Whether the per-model parts (scratch, transform plan) are `model`'s.
+    fn follows(&self, model: &Arc<Model>) -> bool {
+        self.model.as_ref().is_some_and(|m| Arc::ptr_eq(m, model))
+    }
+
+    /// Takes `model` (the robot was spawned or recompiled): its transform
+    /// plan, and a scratch made again when first needed.
+    fn follow(&mut self, model: &Arc<Model>) {
+        self.data = None;
+        self.tf = tf_plan(model, &frame_parents(model));
+        self.model = Some(model.clone());
+    }
+}
+
 /// Tells apart independent samplers of the same kind: the MCAP log
 /// ([`LogChannel`]) and e.g. the live monitor. Each channel has its own
 /// [`Logger`] resource, rate and snapshot, so one never changes what the
@@ -626,10 +641,8 @@ fn snapshot<C: SampleChannel>(world: &World, logger: &mut Logger<C>, due: Option
             r.model = None;
             continue;
         };
-        if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
-            r.data = None;
-            r.tf = tf_plan(&sim.model, &frame_parents(&sim.model));
-            r.model = Some(sim.model.clone());
+        if !r.follows(&sim.model) {
+            r.follow(&sim.model);
         }
         r.q.clear();
         r.q.extend_from_slice(&sim.state.q);
@@ -692,15 +705,13 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
         if !(r.logged && j.is_multiple_of(r.every)) {
             continue;
         }
-        if r.model.as_ref().is_none_or(|m| !Arc::ptr_eq(m, &sim.model)) {
+        if !r.follows(&sim.model) {
             // recompiled before this step: the step ran with the new model,
             // whose state sizes must match the snapshot's to sample it
             if r.q.len() != sim.model.nq || r.v.len() != sim.model.nv {
                 continue;
             }
-            r.data = None;
-            r.tf = tf_plan(&sim.model, &frame_parents(&sim.model));
-            r.model = Some(sim.model.clone());
+            r.follow(&sim.model);
         }
         jobs.push(SampleJob {
             robot: r,
@@ -764,6 +775,13 @@ fn prepare(
         forward_kinematics(model, d, q, v);
         &*d
     };
+    evaluate_contacts(sim, data, evals);
+    cached
+}
+
+/// Every contact point of `sim` evaluated at the kinematics in `data`, with
+/// the contact states the step used, into `evals` (in point order).
+fn evaluate_contacts(sim: &RobotSim, data: &Data, evals: &mut Vec<ContactEval>) {
     let c = &sim.contact;
     evals.clear();
     evals.extend(
@@ -772,7 +790,6 @@ fn prepare(
             .zip(&c.states)
             .map(|(p, s)| evaluate(p, data, &c.terrain, s)),
     );
-    cached
 }
 
 /// Calls `f` with views of `robots` (root entities, each with the `(q, v)`
@@ -794,13 +811,8 @@ pub fn with_fresh_views<R>(
             let sim = robot_sim(world, entity)?;
             let mut data = Data::new(&sim.model);
             forward_kinematics(&sim.model, &mut data, q, v);
-            let c = &sim.contact;
-            let evals: Vec<_> = c
-                .points
-                .iter()
-                .zip(&c.states)
-                .map(|(p, s)| evaluate(p, &data, &c.terrain, s))
-                .collect();
+            let mut evals = Vec::new();
+            evaluate_contacts(sim, &data, &mut evals);
             Some((i, q, v, sim, data, evals))
         })
         .collect();
