@@ -256,9 +256,7 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
             crate::actuators::default_kind(&r.model, imposed_motion),
         )?;
         if let Some(specs) = &actuators {
-            if let Controller::Prescribed(pc) = &controller
-                && pc.controller.params.mode == PrescribedMode::Hybrid
-            {
+            if imposed_motion {
                 return Err(loc.at(
                     &format!("{p}.actuators"),
                     "motor and servo actuators need a controller that commands them; the prescribed controller's hybrid mode imposes the motion: use mode = \"pd\"",
