@@ -6,16 +6,35 @@
 //! Overrides: ELIM (effort limit, N·m), LIFT (m), HT (height target, m),
 //! KG (Raibert gain, s), MSX (max step x, m), VF (velocity filter, s),
 //! CA (command accel, m/s²), HR (max horizontal force ratio), SNC (stance
-//! needs contact), KGU (knee guard, rad), BW (swing bandwidth, Hz), KX/KXD
-//! (scale of the x stiffness/damping), KR/KRD (rotational), PERIOD and FOUR (a trot's
-//! period and four-leg support, s), EVERY (steps per
-//! tick), PRINT (timeline interval, s; 0: none), LEGMASS (scale of quad16's
-//! thigh, shank and foot masses), GAIT (trot, walk, pace, bound, pronk,
-//! stand), PERT and SEED (joint angles at the start moved by up to PERT rad,
-//! pseudo-randomly by SEED), STEPUP (a 5 cm platform from that x, m), SINE
-//! (trot_sine's waves from that x, m).
-
+//! needs contact), KGU (knee guard, rad), ETD (early-touchdown minimum swing
+//! progress), BW (swing bandwidth, Hz), KX/KXD (scale of the x
+//! stiffness/damping), KR/KRD (rotational), PERIOD and FOUR (a trot's period
+//! and four-leg support, s), EVERY (steps per tick), PRINT (timeline
+//! interval, s; 0: none), LEGMASS (scale of quad16's thigh, shank and foot
+//! masses), GAIT (trot, walk, pace, bound, pronk, stand), PERT and SEED
+//! (joint angles at the start moved by up to PERT rad, pseudo-randomly by
+//! SEED), PERTX (the start moved along x by SEED × PERTX m), STEPUP (a 5 cm
+//! platform from that x, m), SINE (trot_sine's waves from that x, m).
+//!
+//! MOTOR: the robot's default DC motors (as the pipeline's default
+//! actuators; the walker's defaults come from the model without their
+//! reflected inertia, as in the pipeline) instead of ideal torque sources.
+//! On the motors a joint offset (PERT) of 1e-6 rad is damped out while the
+//! robot settles (their Coulomb friction): neighbours so made fall at the
+//! same instant; PERTX (a start moved by micrometres, whose rounding never
+//! decays) gives independent samples, as `start_xy_m` does in the pipeline.
+//!
+//! Diagnostics: TD (a line per touchdown: leg, swing progress), SWINGDIAG
+//! (mean swing-foot error against its reference per quarter of the swing,
+//! front and hind legs, over DIAGFROM..DIAGTO s), SHOWPARAMS, PRECISE (base
+//! position, first joint torques and targets at every timeline line), LEGS
+//! (per-leg forces, torques, knee angle, load). The RESULT line counts
+//! touchdowns, early ones (swing progress < 0.95) and controller ticks at
+//! which a loaded stance foot (load > 0.5) had no contact.
 use glam::{DVec2, DVec3};
+use quadsim_engine::actuator_model::{
+    ActuatorBank, ActuatorKind, ActuatorSpec, add_reflected_inertia, model_defaults,
+};
 use quadsim_engine::contact::{
     ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
 };
@@ -63,6 +82,16 @@ fn main() {
     let mut data = Data::new(&model);
     let q0 = robots::nominal_q(&robot).unwrap();
     let mut p = WalkerParams::default_for(&desc, &model);
+    if std::env::var("SHOWPARAMS").is_ok() {
+        println!(
+            "params: height {:.4} placement {:?} lift {:.4} kp {:?} kd {:?}",
+            p.vmc.base_height_m,
+            p.placement,
+            p.lift_height_m,
+            &p.swing_kp_nm_per_rad[..4],
+            &p.swing_kd_nms_per_rad[..4]
+        );
+    }
     p.command.forward_mps = vx;
     if let (Some(per), Some(four)) = (env("PERIOD"), env("FOUR")) {
         p.gait =
@@ -91,6 +120,9 @@ fn main() {
     }
     if std::env::var("SNC").is_ok() {
         p.stance_needs_contact = true;
+    }
+    if let Some(x) = env("ETD") {
+        p.scheduler.early_touchdown_min_progress = x;
     }
     if let Some(x) = env("KGU") {
         p.knee_guard_rad = x;
@@ -123,6 +155,26 @@ fn main() {
         };
         p.gait = Gait::default_of(kind).unwrap();
     }
+    let mut ws_actuators = None;
+    let every = env("EVERY").map_or(4, |e| e as usize);
+    if std::env::var("MOTOR").is_ok() {
+        // quad16's default DC motors, as the pipeline's default actuators
+        let nv0 = model.base_nv();
+        let specs: Vec<ActuatorSpec> = (nv0..model.nv)
+            .map(|j| {
+                model_defaults(
+                    &robot,
+                    ActuatorKind::DcMotor,
+                    model.effort_limit[j],
+                    model.velocity_limit[j],
+                )
+                .unwrap()
+            })
+            .collect();
+        add_reflected_inertia(&mut model, &specs);
+        ws_actuators = Some(ActuatorBank::new(&specs, every as u64));
+    }
+    let model = model;
     let mut q0 = q0;
     if let Some(eps) = env("PERT") {
         // a deterministic perturbation of the joint angles, ±eps rad
@@ -130,6 +182,12 @@ fn main() {
         for (j, qj) in q0[7..].iter_mut().enumerate() {
             *qj += eps * (seed * 12.9898 + j as f64 * 78.233).sin();
         }
+    }
+    if let Some(dx) = env("PERTX") {
+        // the start moved along x by SEED × PERTX (m): on flat ground only the
+        // rounding changes, which (unlike joint offsets, damped out while the
+        // robot settles on its motors' friction) never decays
+        q0[0] += env("SEED").unwrap_or(1.0) * dx;
     }
     let mut walker = Walker::new(&desc, &model, p).unwrap();
     let concrete = GroundMaterial::preset("concrete").unwrap();
@@ -165,10 +223,10 @@ fn main() {
         v: vec![0.0; model.nv],
     };
     let mut ws = StepWorkspace::new(&model);
+    ws.actuators = ws_actuators;
     let mut tau = vec![0.0; model.nv];
     let mut tj = vec![0.0; model.nv - 6];
     let dt = 0.0005;
-    let every = env("EVERY").map_or(4, |e| e as usize);
     let print_s = env("PRINT").unwrap_or(0.1);
     let print_every = ((print_s / dt).round() as usize).max(1);
     let steps = (dur / dt).round() as usize;
@@ -179,6 +237,13 @@ fn main() {
     let mut sat = 0usize;
     let mut slip = 0usize;
     let mut nflight = 0usize;
+    let (mut touchdowns, mut early_td, mut unloaded_stance) = (0usize, 0usize, 0usize);
+    let td_print = std::env::var("TD").is_ok();
+    let swing_diag = std::env::var("SWINGDIAG").is_ok();
+    let diag_from = (env("DIAGFROM").unwrap_or(1.0) / dt) as usize;
+    let diag_to = (env("DIAGTO").unwrap_or(1e9) / dt) as usize;
+    let mut sw_acc = [DVec3::ZERO; 8];
+    let mut sw_n = [0.0_f64; 8];
     forward_kinematics(&model, &mut data, &st.q, &st.v);
     let c0 = quadsim_engine::com::center_of_mass(&model, &data);
     println!("base above CoM at start: {:.4} m", st.q[2] - c0.z);
@@ -188,6 +253,15 @@ fn main() {
         if k % every == 0 {
             let contacts: Vec<bool> = states.iter().map(|s| s.in_contact).collect();
             let normals: Vec<DVec3> = states.iter().map(|s| s.normal).collect();
+            let before: Vec<(LegPhase, f64)> = (0..points.len())
+                .map(|i| {
+                    let l = walker.scheduler().leg(i);
+                    (
+                        l.phase,
+                        l.time_since_liftoff_s / l.swing_duration_s.max(1e-9),
+                    )
+                })
+                .collect();
             walker.tick(
                 &model,
                 &mut data,
@@ -201,6 +275,42 @@ fn main() {
                 },
                 &mut tj,
             );
+            for (i, &(ph, prog)) in before.iter().enumerate() {
+                let l = walker.scheduler().leg(i);
+                if ph == LegPhase::Swing && l.phase == LegPhase::Stance {
+                    touchdowns += 1;
+                    if prog < 0.95 {
+                        early_td += 1;
+                    }
+                    if td_print {
+                        println!(
+                            "TD t {:.3} leg {i} progress {prog:.2} base vx {:.2} z {:.3}",
+                            k as f64 * dt,
+                            st.v[0],
+                            st.q[2],
+                        );
+                    }
+                }
+                if l.phase == LegPhase::Stance && l.load > 0.5 && !contacts[i] {
+                    unloaded_stance += 1;
+                }
+            }
+            if swing_diag {
+                for i in 0..points.len() {
+                    let l = walker.scheduler().leg(i);
+                    if l.phase != LegPhase::Swing || l.late_s > 0.0 || k < diag_from || k > diag_to
+                    {
+                        continue;
+                    }
+                    let r = l.swing_reference(walker.params.lift_height_m, &walker.params.reach);
+                    let pt = &points[i];
+                    let c = data.pose[pt.body].transform_point(pt.point_in_body)
+                        - DVec3::Z * pt.radius_m;
+                    let b = ((l.swing_progress * 4.0) as usize).min(3) + 4 * (i / 2);
+                    sw_acc[b] += c - r.pos_m;
+                    sw_n[b] += 1.0;
+                }
+            }
             tau[6..].copy_from_slice(&tj);
             for (j, t) in tj.iter().enumerate() {
                 tau_peak[j] = tau_peak[j].max(t.abs());
@@ -275,6 +385,14 @@ fn main() {
                 w.ang.y
             );
             x_prev = st.q[0];
+            if std::env::var("PRECISE").is_ok() {
+                println!(
+                    "  q[0..3] {:.15e} {:.15e} {:.15e}",
+                    st.q[0], st.q[1], st.q[2]
+                );
+                println!("  tau {:?}", &tj[..8]);
+                println!("  q_des {:?}", &walker.joint_targets()[..8]);
+            }
             if std::env::var("LEGS").is_ok() {
                 // per leg: normal force (N), hip-pitch and knee torque (N·m), knee angle (rad), load
                 let nj = 4; // joints per leg (quad16)
@@ -299,10 +417,24 @@ fn main() {
     }
     let mean = x3.map_or(f64::NAN, |x| (st.q[0] - x) / (dur - 3.0));
     println!(
-        "RESULT v {vx} fell {:?} mean[3,{dur}] {mean:.3} tilt {max_tilt:.3} p2p {:.4} sat_ticks {sat} loaded_slip_steps {slip} flight_ticks {nflight}",
+        "RESULT v {vx} fell {:?} mean[3,{dur}] {mean:.3} tilt {max_tilt:.3} p2p {:.4} sat_ticks {sat} loaded_slip_steps {slip} flight_ticks {nflight} touchdowns {touchdowns} early(<0.95) {early_td} loaded_stance_ticks_without_contact {unloaded_stance}",
         fell,
         zmax - zmin
     );
+    if swing_diag {
+        for (b, (a, n)) in sw_acc.iter().zip(&sw_n).enumerate() {
+            let m = *a / (*n).max(1.0);
+            println!(
+                "swing error (actual − reference, world, m) {} legs, progress {:.2}–{:.2}: dx {:+.3} dy {:+.3} dz {:+.3} ({n} ticks)",
+                if b < 4 { "front" } else { "hind" },
+                (b % 4) as f64 / 4.0,
+                (b % 4 + 1) as f64 / 4.0,
+                m.x,
+                m.y,
+                m.z
+            );
+        }
+    }
     println!(
         "peak |tau| per joint (N·m): {:?}",
         tau_peak.iter().map(|t| t.round()).collect::<Vec<_>>()
