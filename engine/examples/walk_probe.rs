@@ -4,7 +4,7 @@
 //!
 //! `cargo run --release -p quadsim-engine --example walk_probe -- [v_mps] [seconds]`
 //! Overrides: ELIM (effort limit, N·m), LIFT (m), HT (height target, m),
-//! KG (Raibert gain, s), MSX (max step x, m), VF (velocity filter, s),
+//! KG (Raibert gain, s), CLIP (VMC position-error clip, m), MSX (max step x, m), VF (velocity filter, s),
 //! CA (command accel, m/s²), HR (max horizontal force ratio), SNC (stance
 //! needs contact), KGU (knee guard, rad), ETD (early-touchdown minimum swing
 //! progress), BW (swing bandwidth, Hz), KX/KXD (scale of the x
@@ -120,6 +120,9 @@ fn main() {
     }
     if std::env::var("SNC").is_ok() {
         p.stance_needs_contact = true;
+    }
+    if let Some(x) = env("CLIP") {
+        p.vmc.max_position_error_m = x;
     }
     if let Some(x) = env("ETD") {
         p.scheduler.early_touchdown_min_progress = x;
