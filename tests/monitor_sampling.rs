@@ -176,7 +176,8 @@ fn rk4_samples_computed_again_equal_fresh_ones() {
 /// robot's frame on the thread pool right after preparing it (its record),
 /// and the publish tick copies the frames into shared memory. Over a herd of
 /// 32 trotting quad16 (enough for the parallel sampling,
-/// `PARALLEL_SAMPLING_MIN_ROBOTS`), every frame received in this process
+/// `PARALLEL_SAMPLING_MIN_ROBOTS`) with knee and torso contact points beside
+/// the feet (the monitor evaluates the feet only), every frame received in this process
 /// equals, bit for bit, the frame of a fresh sample at the sampled state,
 /// with one worker thread and with two; so the two runs' frames are equal.
 #[test]
@@ -188,7 +189,11 @@ fn frames_written_on_the_pool_equal_fresh_ones_with_1_and_2_threads() {
     const ROBOTS: usize = 32;
     const STEPS: u64 = 200;
     assert!(ROBOTS >= PARALLEL_SAMPLING_MIN_ROBOTS);
-    let src = herd_scenario("quad16", ROBOTS).unwrap();
+    let src = herd_scenario("quad16", ROBOTS).unwrap().replace(
+        "log = false\n",
+        "log = false\ncontact_points = [\"knees\", \"torso\"]\n",
+    );
+    assert!(src.contains("contact_points"));
     let run = |threads: usize| -> Vec<String> {
         let scn = parse_scenario(Path::new("test.toml"), src.clone()).expect("parses");
         let ov = Overrides {
@@ -199,6 +204,8 @@ fn frames_written_on_the_pool_equal_fresh_ones_with_1_and_2_threads() {
         let pool = w.sim.world.resource::<quadsim::components::SimThreadPool>();
         assert_eq!(pool.threads(), threads);
         let robots: Vec<Entity> = w.robots.iter().map(|(_, e)| *e).collect();
+        let sim = w.sim.robot(robots[0]).expect("compiled");
+        assert!(sim.contact.points.len() > sim.run.n_feet, "knees and torso");
         let name = format!("test-pool-frames-{threads}-{}", std::process::id());
         let (dt, sim) = (w.dt_s, &mut w.sim.world);
         let monitor = RunMonitor::start(sim, &name, &robots, Vec::new(), dt, EVERY).expect("shm");

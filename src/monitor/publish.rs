@@ -266,6 +266,11 @@ impl LogSink for MonitorSink {
         self.publisher.publish_frames(records.map(frame_of));
     }
 
+    /// Frames carry the feet's contacts only.
+    fn feet_contacts_only(&self) -> bool {
+        true
+    }
+
     fn send(&mut self, record: LogRecord) {
         match record {
             LogRecord::Robots { robots, .. } => self.publisher.publish_header(&robots),

@@ -105,6 +105,16 @@ pub trait LogSink: Send + Sync + 'static {
     fn send_records(&mut self, t_ns: u64, step: u64, records: Records<'_>) {
         let _ = (t_ns, step, records);
     }
+
+    /// Whether the sink reads only the feet's contacts from its views
+    /// ([`SampleView::foot`]; not the other contact points, e.g. knees and
+    /// torso corners, which [`RobotSample::com_acceleration_mps2`] sums):
+    /// then only the feet are evaluated, and its views'
+    /// [`SampleView::evals`] hold the feet only. Applies to sinks that take
+    /// records or views.
+    fn feet_contacts_only(&self) -> bool {
+        false
+    }
 }
 
 /// A sink's own record of one robot ([`LogSink::takes_records`]), e.g. the
@@ -789,6 +799,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
     let takes_records = logger.sink.takes_records();
     let takes_views = !takes_records && logger.sink.takes_views();
+    let feet_only = (takes_records || takes_views) && logger.sink.feet_contacts_only();
     let mut jobs = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
     let mut index = 0;
@@ -820,7 +831,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let sink = &*logger.sink;
     let work = |job: &mut SampleJob<'_>| {
         let r = &mut *job.robot;
-        job.cached = prepare(job.sim, &r.q, &r.v, &mut r.data, &mut r.evals);
+        job.cached = prepare(job.sim, &r.q, &r.v, &mut r.data, &mut r.evals, feet_only);
         if takes_records {
             // the sink's record, written while this robot's data is in cache
             let Followed {
@@ -861,8 +872,8 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
 }
 
 /// Makes the kinematics (with velocities) at the snapshot `(q, v)` available
-/// and evaluates every contact there into `evals`, with the contact states
-/// the step used. Returns whether the robot's own `Data` holds those
+/// and evaluates every contact (the feet only with `feet_only`) there into
+/// `evals`, with the contact states the step used. Returns whether the robot's own `Data` holds those
 /// kinematics: a semi-implicit Euler step leaves in it the kinematics of its
 /// only derivative evaluation, at its start state, which is the snapshot
 /// (the kinematics cache's key, `q` and `v` bit for bit, says whether it
@@ -880,6 +891,7 @@ fn prepare(
     v: &[f64],
     scratch: &mut Option<Data>,
     evals: &mut Vec<ContactEval>,
+    feet_only: bool,
 ) -> bool {
     let model = &sim.model;
     let cached = sim.data.kinematics_hold(model, q, v);
@@ -890,17 +902,23 @@ fn prepare(
         forward_kinematics(model, d, q, v);
         &*d
     };
-    evaluate_contacts(sim, data, evals);
+    let points = if feet_only {
+        sim.run.n_feet.min(sim.contact.points.len())
+    } else {
+        sim.contact.points.len()
+    };
+    evaluate_contacts(sim, data, points, evals);
     cached
 }
 
-/// Every contact point of `sim` evaluated at the kinematics in `data`, with
-/// the contact states the step used, into `evals` (in point order).
-fn evaluate_contacts(sim: &RobotSim, data: &Data, evals: &mut Vec<ContactEval>) {
+/// The first `points` contact points of `sim` (feet first) evaluated at the
+/// kinematics in `data`, with the contact states the step used, into
+/// `evals` (in point order).
+fn evaluate_contacts(sim: &RobotSim, data: &Data, points: usize, evals: &mut Vec<ContactEval>) {
     let c = &sim.contact;
     evals.clear();
     evals.extend(
-        c.points
+        c.points[..points]
             .iter()
             .zip(&c.states)
             .map(|(p, s)| evaluate(p, data, &c.terrain, s)),
@@ -927,7 +945,7 @@ pub fn with_fresh_views<R>(
             let mut data = Data::new(&sim.model);
             forward_kinematics(&sim.model, &mut data, q, v);
             let mut evals = Vec::new();
-            evaluate_contacts(sim, &data, &mut evals);
+            evaluate_contacts(sim, &data, sim.contact.points.len(), &mut evals);
             Some((i, q, v, sim, data, evals))
         })
         .collect();
@@ -964,7 +982,9 @@ pub struct SampleView<'a> {
     pub sim: &'a RobotSim,
     /// Kinematics with velocities at `(q, v)`.
     pub data: &'a Data,
-    /// Every contact point's evaluation at `(q, v)` with the states the step used.
+    /// Every contact point's evaluation at `(q, v)` with the states the step
+    /// used (the feet's only, for a sink that reads only them:
+    /// [`LogSink::feet_contacts_only`]).
     pub evals: &'a [ContactEval],
 }
 
