@@ -188,7 +188,7 @@ fn frames_written_on_the_pool_equal_fresh_ones_with_1_and_2_threads() {
 
     const ROBOTS: usize = 32;
     const STEPS: u64 = 200;
-    assert!(ROBOTS >= PARALLEL_SAMPLING_MIN_ROBOTS);
+    const { assert!(ROBOTS >= PARALLEL_SAMPLING_MIN_ROBOTS) };
     let src = herd_scenario("quad16", ROBOTS).unwrap().replace(
         "log = false\n",
         "log = false\ncontact_points = [\"knees\", \"torso\"]\n",
