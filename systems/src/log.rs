@@ -27,8 +27,10 @@
 //!
 //! The sampling is cheap (a contact evaluation and a few copies, on the steps
 //! that sample or snapshot only; a sink taking [`SampleView`]s copies
-//! nothing); encoding and compression happen in the sink, off the simulation
-//! thread.
+//! nothing; a sink keeping its own record per robot, such as the live
+//! monitor's frame, writes it on the thread pool beside the robot's
+//! sampling, [`LogSink::takes_records`]); encoding and compression happen in
+//! the sink, off the simulation thread.
 
 use std::sync::Arc;
 
@@ -790,7 +792,9 @@ fn view_of<'a>(
 }
 
 /// Samples every logged robot due at step index `j` and sends one record
-/// (or, to a sink that [takes views](LogSink::takes_views), the views).
+/// (or, to a sink that [takes views](LogSink::takes_views), the views; to
+/// one that [takes records](LogSink::takes_records), its records, each
+/// written right after its robot is prepared, on the same worker).
 /// Robots are prepared independently (each from its own snapshot and
 /// scratch), in parallel on the world's [`SimThreadPool`] for a herd, and
 /// collected in the logger's order, so the record does not depend on the
@@ -873,11 +877,11 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
 
 /// Makes the kinematics (with velocities) at the snapshot `(q, v)` available
 /// and evaluates every contact (the feet only with `feet_only`) there into
-/// `evals`, with the contact states the step used. Returns whether the robot's own `Data` holds those
-/// kinematics: a semi-implicit Euler step leaves in it the kinematics of its
-/// only derivative evaluation, at its start state, which is the snapshot
-/// (the kinematics cache's key, `q` and `v` bit for bit, says whether it
-/// does). Otherwise (RK4's last stage; a state changed between the snapshot
+/// `evals`, with the contact states the step used. Returns whether the
+/// robot's own `Data` holds those kinematics: a semi-implicit Euler step
+/// leaves in it the kinematics of its only derivative evaluation, at its
+/// start state, which is the snapshot (the kinematics cache's key, `q` and
+/// `v` bit for bit, says whether it does). Otherwise (RK4's last stage; a state changed between the snapshot
 /// and the step) forward kinematics runs in `scratch`. Either way the values
 /// are the same bit for bit: the same function at the same state.
 ///
