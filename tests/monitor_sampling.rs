@@ -171,3 +171,81 @@ fn rk4_samples_computed_again_equal_fresh_ones() {
     assert_eq!(checked, 100);
     assert_eq!(held, 0, "RK4's last stage is not the sampled state");
 }
+
+/// The live monitor's frames as published: [`RunMonitor`]'s sink writes each
+/// robot's frame on the thread pool right after preparing it (its record),
+/// and the publish tick copies the frames into shared memory. Over a herd of
+/// 32 trotting quad16 (enough for the parallel sampling,
+/// `PARALLEL_SAMPLING_MIN_ROBOTS`) with knee and torso contact points beside
+/// the feet (the monitor evaluates the feet only), every frame received in this process
+/// equals, bit for bit, the frame of a fresh sample at the sampled state,
+/// with one worker thread and with two; so the two runs' frames are equal.
+#[test]
+fn frames_written_on_the_pool_equal_fresh_ones_with_1_and_2_threads() {
+    use quadsim::monitor::{FrameReader, RunMonitor};
+    use quadsim::systems::PARALLEL_SAMPLING_MIN_ROBOTS;
+    use std::time::Duration;
+
+    const ROBOTS: usize = 32;
+    const STEPS: u64 = 200;
+    const { assert!(ROBOTS >= PARALLEL_SAMPLING_MIN_ROBOTS) };
+    let src = herd_scenario("quad16", ROBOTS).unwrap().replace(
+        "log = false\n",
+        "log = false\ncontact_points = [\"knees\", \"torso\"]\n",
+    );
+    assert!(src.contains("contact_points"));
+    let run = |threads: usize| -> Vec<String> {
+        let scn = parse_scenario(Path::new("test.toml"), src.clone()).expect("parses");
+        let ov = Overrides {
+            threads,
+            ..Overrides::default()
+        };
+        let mut w = build_world(&scn, ov).expect("builds");
+        let pool = w.sim.world.resource::<quadsim::components::SimThreadPool>();
+        assert_eq!(pool.threads(), threads);
+        let robots: Vec<Entity> = w.robots.iter().map(|(_, e)| *e).collect();
+        let sim = w.sim.robot(robots[0]).expect("compiled");
+        assert!(sim.contact.points.len() > sim.run.n_feet, "knees and torso");
+        let name = format!("test-pool-frames-{threads}-{}", std::process::id());
+        let (dt, sim) = (w.dt_s, &mut w.sim.world);
+        let monitor = RunMonitor::start(sim, &name, &robots, Vec::new(), dt, EVERY).expect("shm");
+        let mut reader = FrameReader::open(&name).expect("opens").expect("exists");
+        let mut got = Vec::new();
+        for j in 0..STEPS {
+            let before: Vec<_> = robots.iter().map(|&e| state(&w, e)).collect();
+            w.sim.run(1);
+            if !j.is_multiple_of(EVERY) {
+                continue;
+            }
+            let frames = reader
+                .next(Duration::from_secs(10))
+                .expect("reads")
+                .expect("a published instant per sample");
+            assert_eq!(frames.len(), ROBOTS);
+            let at: Vec<(Entity, &[f64], &[f64])> = robots
+                .iter()
+                .zip(&before)
+                .map(|(&e, (q, v))| (e, &q[..], &v[..]))
+                .collect();
+            with_fresh_views(&w.sim.world, &at, |views| {
+                for (k, (view, frame)) in views.iter().zip(&frames).enumerate() {
+                    let fresh = RobotFrame::from_sample(&view.to_sample(false), j, j as f64 * dt);
+                    let frame = format!("{frame:?}");
+                    assert_eq!(
+                        format!("{fresh:?}"),
+                        frame,
+                        "frame of robot {k} at step {j}, {threads} thread(s)"
+                    );
+                    got.push(frame);
+                }
+            });
+        }
+        let stats = monitor.finish(&mut w.sim.world);
+        assert_eq!(stats.dropped(), 0);
+        assert_eq!(stats.published(), STEPS / EVERY);
+        got
+    };
+    let one = run(1);
+    assert_eq!(one.len(), ROBOTS * (STEPS / EVERY) as usize);
+    assert!(one == run(2), "the frames depend on the thread count");
+}

@@ -2,13 +2,16 @@
 //! sampled instant as one slice sample of `n_robots` [`RobotFrame`]s into
 //! shared memory, and the world header (JSON) on every robot-list record.
 
+use std::any::Any;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
-use quadsim_systems::{LogRecord, LogSink, RobotInfo, RobotSample, SampleView};
+use quadsim_systems::{
+    LogRecord, LogSink, Records, RobotInfo, RobotSample, SampleView, ViewRecord,
+};
 use serde_json::json;
 
 use super::frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
@@ -52,9 +55,6 @@ pub struct FramePublisher {
     /// Model of each robot by instance name (the scenario's `robots[].model`).
     models: Vec<(String, String)>,
     stats: Arc<MonitorStats>,
-    /// The last instant's frames, rewritten in place each publish
-    /// ([`RobotFrame::set_from_view`]) and copied into the loan in one go.
-    frames_scratch: std::sync::Mutex<Vec<RobotFrame>>,
 }
 
 impl std::fmt::Debug for FramePublisher {
@@ -129,7 +129,6 @@ impl FramePublisher {
             every_steps,
             models,
             stats: Arc::default(),
-            frames_scratch: std::sync::Mutex::new(Vec::with_capacity(n_robots)),
         })
     }
 
@@ -138,44 +137,42 @@ impl FramePublisher {
         self.stats.clone()
     }
 
-    /// Publishes the sampled instant `tick` of `views.len()` robots: one loan,
-    /// every robot's frame written from its view, one send. A failed loan or
-    /// send drops the instant and counts it.
-    pub fn publish_views(&self, tick: u64, views: &[SampleView<'_>]) {
-        let time_s = tick as f64 * self.dt_s;
-        self.publish_with(views.len(), |frames| {
-            for (f, v) in frames.iter_mut().zip(views) {
-                f.set_from_view(v, tick, time_s);
-            }
-        });
+    /// The monitor's publish tick: sends the instant `frames` (one per
+    /// robot, written beforehand, [`RobotFrame::set_from_view`]) as one
+    /// slice sample: one loan, each frame copied into it (the one write into
+    /// shared memory), one send. A failed loan or send drops the instant and
+    /// counts it.
+    pub fn publish_frames<'a>(&self, frames: impl ExactSizeIterator<Item = &'a RobotFrame>) {
+        let n = frames.len();
+        let mut frames = frames.copied();
+        self.publish_with(n, |_| frames.next().expect("n frames"));
     }
 
-    /// [`Self::publish_views`] from the log's samples of the instant.
+    /// Publishes the sampled instant `tick` made of the log's `samples`.
     pub fn publish(&self, tick: u64, samples: &[RobotSample]) {
-        let time_s = tick as f64 * self.dt_s;
-        self.publish_with(samples.len(), |frames| {
-            for (f, s) in frames.iter_mut().zip(samples) {
-                f.set_from_sample(s, tick, time_s);
-            }
+        let time_s = self.time_s(tick);
+        self.publish_with(samples.len(), |i| {
+            RobotFrame::from_sample(&samples[i], tick, time_s)
         });
     }
 
-    /// One instant of `n` frames: `write` updates them in place, then they
-    /// are copied into the loan in one go and sent.
-    fn publish_with(&self, n: usize, write: impl FnOnce(&mut [RobotFrame])) {
+    /// Simulation time of step index `tick` (s), as frames carry it.
+    #[inline]
+    pub fn time_s(&self, tick: u64) -> f64 {
+        tick as f64 * self.dt_s
+    }
+
+    /// One instant of `n` frames, frame `i` being `frame(i)` (called in
+    /// order), written straight into the loan, then sent.
+    #[inline]
+    fn publish_with(&self, n: usize, frame: impl FnMut(usize) -> RobotFrame) {
         // late subscribers of the header get its last sample (history 1)
         let _ = self.header.update_connections();
         let Ok(sample) = self.frames.loan_slice_uninit(n) else {
             self.stats.dropped.fetch_add(1, Ordering::Relaxed);
             return;
         };
-        let mut frames = self
-            .frames_scratch
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        frames.resize(n, RobotFrame::default());
-        write(&mut frames);
-        let sample = sample.write_from_slice(&frames);
+        let sample = sample.write_from_fn(frame);
         match sample.send() {
             Ok(_) => self.stats.published.fetch_add(1, Ordering::Relaxed),
             Err(_) => self.stats.dropped.fetch_add(1, Ordering::Relaxed),
@@ -223,7 +220,12 @@ impl FramePublisher {
     }
 }
 
-/// The monitor channel's sink (see [`quadsim_systems::MonitorChannel`]).
+/// The monitor channel's sink (see [`quadsim_systems::MonitorChannel`]). It
+/// keeps one [`RobotFrame`] per robot as its record
+/// ([`LogSink::takes_records`]): the sampling writes each robot's frame in
+/// place from its view on the thread pool, right after preparing the robot,
+/// and the publish tick ([`FramePublisher::publish_frames`]) only copies the
+/// ready frames into shared memory.
 #[derive(Debug)]
 pub struct MonitorSink {
     publisher: Arc<FramePublisher>,
@@ -236,13 +238,37 @@ impl MonitorSink {
     }
 }
 
+/// The frame in a record the sink made.
+fn frame_of(record: &(dyn Any + Send + Sync)) -> &RobotFrame {
+    record
+        .downcast_ref()
+        .expect("MonitorSink::new_record made a RobotFrame")
+}
+
 impl LogSink for MonitorSink {
-    fn takes_views(&self) -> bool {
+    fn takes_records(&self) -> bool {
         true
     }
 
-    fn send_views(&mut self, _t_ns: u64, step: u64, views: &[SampleView<'_>]) {
-        self.publisher.publish_views(step, views);
+    fn new_record(&self) -> ViewRecord {
+        Box::new(RobotFrame::default())
+    }
+
+    #[inline]
+    fn write_record(&self, record: &mut ViewRecord, step: u64, view: &SampleView<'_>) {
+        let frame: &mut RobotFrame = record
+            .downcast_mut()
+            .expect("MonitorSink::new_record made a RobotFrame");
+        frame.set_from_view(view, step, self.publisher.time_s(step));
+    }
+
+    fn send_records(&mut self, _t_ns: u64, _step: u64, records: Records<'_>) {
+        self.publisher.publish_frames(records.map(frame_of));
+    }
+
+    /// Frames carry the feet's contacts only.
+    fn feet_contacts_only(&self) -> bool {
+        true
     }
 
     fn send(&mut self, record: LogRecord) {

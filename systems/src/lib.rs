@@ -31,9 +31,9 @@ pub use control::{control_robot, control_robot_at, run_controllers};
 pub use ground::compile_ground;
 pub use log::{
     FootLog, LogChannel, LogRecord, LogSink, Logger, MonitorChannel, PARALLEL_SAMPLING_MIN_ROBOTS,
-    RobotInfo, RobotSample, SampleChannel, SampleView, SensingLog, VelocityTargets, finish_logging,
-    finish_sampling, frame_parents, log_due, log_step, start_logging, start_sampling,
-    start_sampling_each, step_time_ns, with_fresh_views,
+    Records, RobotInfo, RobotSample, SampleChannel, SampleView, SensingLog, VelocityTargets,
+    ViewRecord, finish_logging, finish_sampling, frame_parents, log_due, log_step, start_logging,
+    start_sampling, start_sampling_each, step_time_ns, with_fresh_views,
 };
 pub use metrics::{record_metrics, record_robot};
 pub use payload::apply_payload_events;

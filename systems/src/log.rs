@@ -27,8 +27,10 @@
 //!
 //! The sampling is cheap (a contact evaluation and a few copies, on the steps
 //! that sample or snapshot only; a sink taking [`SampleView`]s copies
-//! nothing); encoding and compression happen in the sink, off the simulation
-//! thread.
+//! nothing; a sink keeping its own record per robot, such as the live
+//! monitor's frame, writes it on the thread pool beside the robot's
+//! sampling, [`LogSink::takes_records`]); encoding and compression happen in
+//! the sink, off the simulation thread.
 
 use std::sync::Arc;
 
@@ -71,7 +73,87 @@ pub trait LogSink: Send + Sync + 'static {
     fn send_views(&mut self, t_ns: u64, step: u64, views: &[SampleView<'_>]) {
         let _ = (t_ns, step, views);
     }
+
+    /// Whether the sink keeps its own record of each robot ([`ViewRecord`],
+    /// made once per robot by [`LogSink::new_record`]), written from the
+    /// robot's view by [`LogSink::write_record`] on the thread pool right
+    /// after the robot is prepared, and handed over per instant by
+    /// [`LogSink::send_records`]. Takes precedence over
+    /// [`LogSink::takes_views`]: the sink then gets neither views nor
+    /// [`LogRecord::Step`] records.
+    fn takes_records(&self) -> bool {
+        false
+    }
+
+    /// A new record slot for one robot, kept by the logger with the robot
+    /// and rewritten in place at each of its samples (its previous content
+    /// is the robot's last record). Called once per followed robot when the
+    /// logger starts, never per step.
+    fn new_record(&self) -> ViewRecord {
+        Box::new(())
+    }
+
+    /// Writes `record` (one of [`LogSink::new_record`]'s) from the robot's
+    /// view at step index `step`. Runs on the world's thread pool, for
+    /// different robots at once; it must not block and should not allocate.
+    fn write_record(&self, record: &mut ViewRecord, step: u64, view: &SampleView<'_>) {
+        let _ = (record, step, view);
+    }
+
+    /// One instant's records (those of the robots sampled at step index
+    /// `step`, time `t_ns`, freshly written), in the logger's order; called
+    /// instead of [`LogSink::send`] with a [`LogRecord::Step`] when
+    /// [`LogSink::takes_records`].
+    fn send_records(&mut self, t_ns: u64, step: u64, records: Records<'_>) {
+        let _ = (t_ns, step, records);
+    }
+
+    /// Whether the sink reads only the feet's contacts from its views
+    /// ([`SampleView::foot`]; not the other contact points, e.g. knees and
+    /// torso corners, which [`RobotSample::com_acceleration_mps2`] sums):
+    /// then only the feet are evaluated, and its views'
+    /// [`SampleView::evals`] hold the feet only. Applies to sinks that take
+    /// records or views.
+    fn feet_contacts_only(&self) -> bool {
+        false
+    }
 }
+
+/// A sink's own record of one robot ([`LogSink::takes_records`]), e.g. the
+/// live monitor's shared-memory frame; the sink downcasts it to its type.
+pub type ViewRecord = Box<dyn std::any::Any + Send + Sync>;
+
+/// The records of one instant ([`LogSink::send_records`]), in the logger's
+/// order: borrowed, no copy and no allocation.
+pub struct Records<'a> {
+    jobs: std::slice::Iter<'a, SampleJob<'a>>,
+}
+
+impl std::fmt::Debug for Records<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Records")
+            .field("len", &self.jobs.len())
+            .finish()
+    }
+}
+
+impl<'a> Iterator for Records<'a> {
+    type Item = &'a (dyn std::any::Any + Send + Sync);
+
+    #[inline]
+    fn next(&mut self) -> Option<Self::Item> {
+        self.jobs.next().map(|job| {
+            let r: &'a Followed = &*job.robot;
+            &**r.record.as_ref().expect("the logger made every record")
+        })
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.jobs.size_hint()
+    }
+}
+
+impl ExactSizeIterator for Records<'_> {}
 
 /// One robot's static description, sent before its first sample and again
 /// whenever its model is recompiled.
@@ -366,6 +448,8 @@ struct Followed {
     /// `(q, v)` at the start of the current step.
     q: Vec<f64>,
     v: Vec<f64>,
+    /// The sink's record of this robot, when it [takes records](LogSink::takes_records).
+    record: Option<ViewRecord>,
 }
 
 impl Followed {
@@ -494,6 +578,7 @@ pub fn start_sampling_each<C: SampleChannel>(
                 tf: Vec::new(),
                 q: Vec::new(),
                 v: Vec::new(),
+                record: sink.takes_records().then(|| sink.new_record()),
             })
             .collect(),
         sink,
@@ -669,30 +754,56 @@ struct SampleJob<'a> {
 impl SampleJob<'_> {
     fn view(&self) -> SampleView<'_> {
         let r = &*self.robot;
-        SampleView {
-            robot: self.index,
-            q: &r.q,
-            v: &r.v,
-            sim: self.sim,
-            data: if self.cached {
-                &self.sim.data
-            } else {
-                r.data.as_ref().expect("prepare made the scratch")
-            },
-            evals: &r.evals,
-        }
+        view_of(
+            self.index,
+            self.sim,
+            self.cached,
+            &r.q,
+            &r.v,
+            &r.data,
+            &r.evals,
+        )
+    }
+}
+
+/// The view of a prepared robot (see [`SampleJob`]) from the follower's
+/// parts, so its record can be borrowed mutably beside it.
+fn view_of<'a>(
+    robot: usize,
+    sim: &'a RobotSim,
+    cached: bool,
+    q: &'a [f64],
+    v: &'a [f64],
+    scratch: &'a Option<Data>,
+    evals: &'a [ContactEval],
+) -> SampleView<'a> {
+    SampleView {
+        robot,
+        q,
+        v,
+        sim,
+        data: if cached {
+            &sim.data
+        } else {
+            scratch.as_ref().expect("prepare made the scratch")
+        },
+        evals,
     }
 }
 
 /// Samples every logged robot due at step index `j` and sends one record
-/// (or, to a sink that [takes views](LogSink::takes_views), the views).
+/// (or, to a sink that [takes views](LogSink::takes_views), the views; to
+/// one that [takes records](LogSink::takes_records), its records, each
+/// written right after its robot is prepared, on the same worker).
 /// Robots are prepared independently (each from its own snapshot and
 /// scratch), in parallel on the world's [`SimThreadPool`] for a herd, and
 /// collected in the logger's order, so the record does not depend on the
 /// thread count.
 fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
-    let takes_views = logger.sink.takes_views();
+    let takes_records = logger.sink.takes_records();
+    let takes_views = !takes_records && logger.sink.takes_views();
+    let feet_only = (takes_records || takes_views) && logger.sink.feet_contacts_only();
     let mut jobs = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
     let mut index = 0;
@@ -721,10 +832,24 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             out: None,
         });
     }
+    let sink = &*logger.sink;
     let work = |job: &mut SampleJob<'_>| {
         let r = &mut *job.robot;
-        job.cached = prepare(job.sim, &r.q, &r.v, &mut r.data, &mut r.evals);
-        if !takes_views {
+        job.cached = prepare(job.sim, &r.q, &r.v, &mut r.data, &mut r.evals, feet_only);
+        if takes_records {
+            // the sink's record, written while this robot's data is in cache
+            let Followed {
+                q,
+                v,
+                data,
+                evals,
+                record,
+                ..
+            } = r;
+            let view = view_of(job.index, job.sim, job.cached, q, v, data, evals);
+            let record = record.as_mut().expect("the logger made every record");
+            sink.write_record(record, j, &view);
+        } else if !takes_views {
             let tf = C::LINK_TRANSFORMS.then_some(&job.robot.tf[..]);
             let sample = job.view().sample(tf);
             job.out = Some(sample);
@@ -736,6 +861,11 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     }
     logger.last_sampled = Some(j);
     let t_ns = step_time_ns(j, dt);
+    if takes_records {
+        let records = Records { jobs: jobs.iter() };
+        logger.sink.send_records(t_ns, j, records);
+        return;
+    }
     if takes_views {
         let views: Vec<SampleView<'_>> = jobs.iter().map(SampleJob::view).collect();
         logger.sink.send_views(t_ns, j, &views);
@@ -746,12 +876,12 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
 }
 
 /// Makes the kinematics (with velocities) at the snapshot `(q, v)` available
-/// and evaluates every contact there into `evals`, with the contact states
-/// the step used. Returns whether the robot's own `Data` holds those
-/// kinematics: a semi-implicit Euler step leaves in it the kinematics of its
-/// only derivative evaluation, at its start state, which is the snapshot
-/// (the kinematics cache's key, `q` and `v` bit for bit, says whether it
-/// does). Otherwise (RK4's last stage; a state changed between the snapshot
+/// and evaluates every contact (the feet only with `feet_only`) there into
+/// `evals`, with the contact states the step used. Returns whether the
+/// robot's own `Data` holds those kinematics: a semi-implicit Euler step
+/// leaves in it the kinematics of its only derivative evaluation, at its
+/// start state, which is the snapshot (the kinematics cache's key, `q` and
+/// `v` bit for bit, says whether it does). Otherwise (RK4's last stage; a state changed between the snapshot
 /// and the step) forward kinematics runs in `scratch`. Either way the values
 /// are the same bit for bit: the same function at the same state.
 ///
@@ -765,6 +895,7 @@ fn prepare(
     v: &[f64],
     scratch: &mut Option<Data>,
     evals: &mut Vec<ContactEval>,
+    feet_only: bool,
 ) -> bool {
     let model = &sim.model;
     let cached = sim.data.kinematics_hold(model, q, v);
@@ -775,17 +906,23 @@ fn prepare(
         forward_kinematics(model, d, q, v);
         &*d
     };
-    evaluate_contacts(sim, data, evals);
+    let points = if feet_only {
+        sim.run.n_feet.min(sim.contact.points.len())
+    } else {
+        sim.contact.points.len()
+    };
+    evaluate_contacts(sim, data, points, evals);
     cached
 }
 
-/// Every contact point of `sim` evaluated at the kinematics in `data`, with
-/// the contact states the step used, into `evals` (in point order).
-fn evaluate_contacts(sim: &RobotSim, data: &Data, evals: &mut Vec<ContactEval>) {
+/// The first `points` contact points of `sim` (feet first) evaluated at the
+/// kinematics in `data`, with the contact states the step used, into
+/// `evals` (in point order).
+fn evaluate_contacts(sim: &RobotSim, data: &Data, points: usize, evals: &mut Vec<ContactEval>) {
     let c = &sim.contact;
     evals.clear();
     evals.extend(
-        c.points
+        c.points[..points]
             .iter()
             .zip(&c.states)
             .map(|(p, s)| evaluate(p, data, &c.terrain, s)),
@@ -812,7 +949,7 @@ pub fn with_fresh_views<R>(
             let mut data = Data::new(&sim.model);
             forward_kinematics(&sim.model, &mut data, q, v);
             let mut evals = Vec::new();
-            evaluate_contacts(sim, &data, &mut evals);
+            evaluate_contacts(sim, &data, sim.contact.points.len(), &mut evals);
             Some((i, q, v, sim, data, evals))
         })
         .collect();
@@ -849,7 +986,9 @@ pub struct SampleView<'a> {
     pub sim: &'a RobotSim,
     /// Kinematics with velocities at `(q, v)`.
     pub data: &'a Data,
-    /// Every contact point's evaluation at `(q, v)` with the states the step used.
+    /// Every contact point's evaluation at `(q, v)` with the states the step
+    /// used (the feet's only, for a sink that reads only them:
+    /// [`LogSink::feet_contacts_only`]).
     pub evals: &'a [ContactEval],
 }
 
