@@ -95,7 +95,7 @@ fn editing_mass_recompiles_outside_the_step() {
     assert!((holding_force_n(&before) - 4.5 * 9.81).abs() < 1e-12);
 
     let lower = link_entity(&mut sim, "lower");
-    sim.world.get_mut::<Mass>(lower).unwrap().0 = 2.0;
+    sim.world.entity_mut(lower).insert(Mass(2.0));
 
     // The step schedule alone never compiles: same model, state keeps moving.
     sim.run_step_schedule();
@@ -150,7 +150,7 @@ fn invalid_edit_is_reported_and_keeps_the_last_model() {
     let root = sim.spawn_robot(&pendulum()).unwrap();
     let model = sim.robot(root).unwrap().model.clone();
     let lower = link_entity(&mut sim, "lower");
-    sim.world.get_mut::<Mass>(lower).unwrap().0 = -1.0;
+    sim.world.entity_mut(lower).insert(Mass(-1.0));
     sim.step();
     match sim.world.get::<CompileFailure>(root) {
         Some(CompileFailure(CompileError::Model {
@@ -168,7 +168,7 @@ fn invalid_edit_is_reported_and_keeps_the_last_model() {
     assert_eq!(sim.clock().step, 1);
 
     // fixing the edit clears the failure
-    sim.world.get_mut::<Mass>(lower).unwrap().0 = 0.7;
+    sim.world.entity_mut(lower).insert(Mass(0.7));
     sim.step();
     assert!(sim.world.get::<CompileFailure>(root).is_none());
     assert!((sim.robot(root).unwrap().model.total_mass - 4.7).abs() < 1e-15);
@@ -258,7 +258,7 @@ fn robots_of_one_articulation_share_one_model() {
             .0
     };
     let mass_kg = sim.world.get::<Mass>(torso).unwrap().0;
-    sim.world.get_mut::<Mass>(torso).unwrap().0 = mass_kg + 1.0;
+    sim.world.entity_mut(torso).insert(Mass(mass_kg + 1.0));
     sim.compile();
     let b = model(&sim, roots[1]);
     assert!(!Arc::ptr_eq(&a, &b));
@@ -266,7 +266,7 @@ fn robots_of_one_articulation_share_one_model() {
     assert!(Arc::ptr_eq(&a, &model(&sim, roots[2])));
     drop(b);
     // Setting it back shares the first model again.
-    sim.world.get_mut::<Mass>(torso).unwrap().0 = mass_kg;
+    sim.world.entity_mut(torso).insert(Mass(mass_kg));
     sim.compile();
     assert!(Arc::ptr_eq(&a, &model(&sim, roots[1])));
     assert_eq!(
