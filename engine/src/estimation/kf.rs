@@ -21,6 +21,7 @@
 //! update: no matrix inverse).
 
 use glam::DVec3;
+use multiversion::multiversion;
 use nalgebra::{SMatrix, SVector};
 
 /// Number of feet the filter carries.
@@ -200,12 +201,7 @@ impl BaseKf {
         for (x, k) in self.x.iter_mut().zip(&k) {
             *x += k * innovation;
         }
-        // column by column (nalgebra's storage order)
-        for (j, phj) in ph.iter().enumerate() {
-            for (p, k) in self.p.column_mut(j).iter_mut().zip(&k) {
-                *p -= k * phj;
-            }
-        }
+        rank_one_downdate(self.p.as_mut_slice(), &k, &ph);
     }
 
     /// [`BaseKf::update_scalar`] in nalgebra's dense matrix algebra (the
@@ -279,6 +275,18 @@ impl BaseKf {
         }
         // symmetrised against round-off
         self.symmetrise();
+    }
+}
+
+/// `P ← P − k phᵀ` on the column-major `P` (n × n, n = [`KF_N`]), entry by
+/// entry (`P_ij − k_i ph_j`: no fused multiply–add, so every build gives the
+/// same bits); the x86-64-v3 clone runs four rows per AVX register.
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn rank_one_downdate(p: &mut [f64], k: &[f64; KF_N], ph: &[f64; KF_N]) {
+    for (col, phj) in p.chunks_exact_mut(KF_N).zip(ph) {
+        for (p, k) in col.iter_mut().zip(k) {
+            *p -= k * phj;
+        }
     }
 }
 
