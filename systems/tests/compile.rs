@@ -274,3 +274,66 @@ fn robots_of_one_articulation_share_one_model() {
         2
     );
 }
+
+/// The compile stage learns of part edits from insert observers (the
+/// description components are immutable): a joint edit, a shape edit and a
+/// shape's despawn each recompile their own robot, and only it.
+#[test]
+fn joint_and_shape_edits_recompile_only_their_robot() {
+    use quadsim_components::{BelongsTo, Collider, ColliderOf, Joint, JointDamping};
+    use quadsim_engine::description::Geometry;
+
+    let mut sim = Simulation::new(SimConfig::default(), 1).unwrap();
+    let a = sim.spawn_robot(&pendulum()).unwrap();
+    let b = sim.spawn_robot(&pendulum()).unwrap();
+    sim.run(2);
+    let m0 = sim.robot(b).unwrap().model.clone();
+    assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &m0));
+
+    // a joint edit on robot a
+    let mut joints = sim.world.query::<(Entity, &Joint, &BelongsTo)>();
+    let elbow_a = joints
+        .iter(&sim.world)
+        .find(|(_, j, o)| o.0 == a && j.name == "elbow")
+        .unwrap()
+        .0;
+    sim.world.entity_mut(elbow_a).insert(JointDamping(0.3));
+    sim.step();
+    let ma = sim.robot(a).unwrap().model.clone();
+    assert!(ma.damping.contains(&0.3));
+    assert!(Arc::ptr_eq(&sim.robot(b).unwrap().model, &m0));
+
+    // robot b's base box doubled: its derived inertia grows
+    let mut links = sim.world.query::<(Entity, &Link, &BelongsTo)>();
+    let base_b = links
+        .iter(&sim.world)
+        .find(|(_, l, o)| o.0 == b && l.name == "base")
+        .unwrap()
+        .0;
+    let mut colliders = sim.world.query::<(Entity, &ColliderOf)>();
+    let collider_b = colliders
+        .iter(&sim.world)
+        .find(|(_, c)| c.0 == base_b)
+        .unwrap()
+        .0;
+    sim.world
+        .entity_mut(collider_b)
+        .insert(Collider::new(Geometry {
+            origin: Transform::IDENTITY,
+            shape: Shape::Box {
+                size_m: DVec3::new(0.8, 0.4, 0.2),
+            },
+        }));
+    sim.step();
+    let mb = sim.robot(b).unwrap().model.clone();
+    assert!(mb.inertia[0].inertia_com.x_axis.x > 3.9 * m0.inertia[0].inertia_com.x_axis.x);
+    assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &ma));
+
+    // its collider despawned: the inertia comes from the visual box again
+    sim.world.despawn(collider_b);
+    sim.step();
+    let mb2 = sim.robot(b).unwrap().model.clone();
+    assert!(!Arc::ptr_eq(&mb2, &mb));
+    assert_eq!(mb2.inertia, m0.inertia);
+    assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &ma));
+}
