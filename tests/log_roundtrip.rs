@@ -501,15 +501,22 @@ fn a_recompiled_robot_is_drawn_again_and_keeps_being_logged() {
     let log = start_run_log(&scn, &mut world, &path, 4).unwrap();
     world.sim.run(100);
     // a heavier torso: the robot is recompiled before the next step
-    let mut links = world
+    // (description components are immutable: an edit inserts a new value)
+    let mut links = world.sim.world.query::<(
+        bevy_ecs::entity::Entity,
+        &quadsim_components::Link,
+        &quadsim_components::Mass,
+    )>();
+    let (torso, mass) = links
+        .iter(&world.sim.world)
+        .find(|(_, link, _)| link.name == "torso")
+        .map(|(e, _, m)| (e, m.0))
+        .unwrap();
+    world
         .sim
         .world
-        .query::<(&quadsim_components::Link, &mut quadsim_components::Mass)>();
-    for (link, mut mass) in links.iter_mut(&mut world.sim.world) {
-        if link.name == "torso" {
-            mass.0 += 1.0;
-        }
-    }
+        .entity_mut(torso)
+        .insert(quadsim_components::Mass(mass + 1.0));
     world.sim.run(100);
     let mass = world.sim.robot(world.robots[0].1).unwrap().model.total_mass;
     log.finish(&mut world, &RunOutcome::default()).unwrap();

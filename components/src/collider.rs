@@ -13,6 +13,7 @@ use quadsim_engine::description::{Geometry, Shape};
 /// reference with no parry shape. Replace the whole component to edit it, so
 /// the two cannot disagree.
 #[derive(Component, Clone, Debug)]
+#[component(immutable)]
 pub struct Collider {
     geometry: Geometry,
     shape: Option<SharedShape>,
@@ -96,6 +97,7 @@ pub struct LinkColliders(Vec<Entity>);
 
 /// A display-only shape of a link (shape frame in the link frame).
 #[derive(Component, Clone, Debug, PartialEq)]
+#[component(immutable)]
 pub struct Visual(pub Geometry);
 
 /// On a visual entity: the link it is attached to.

@@ -19,6 +19,7 @@ pub enum JointMotion {
 
 /// A joint between two links of a robot (see [`JointConnection`]).
 #[derive(Component, Clone, Debug, PartialEq)]
+#[component(immutable)]
 #[require(
     JointPlacement,
     EffortLimit,
@@ -64,10 +65,12 @@ impl Joint {
 /// Child link frame in the parent link frame at zero joint position: the
 /// joint's centre and orientation (URDF `<joint><origin>`).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct JointPlacement(pub Transform);
 
 /// The two link entities a joint connects.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+#[component(immutable)]
 pub struct JointConnection {
     /// Parent link entity.
     pub parent: Entity,
@@ -77,6 +80,7 @@ pub struct JointConnection {
 
 /// Position limits (rad or m, `lower ≤ upper`); absent: unlimited.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[component(immutable)]
 pub struct JointLimits {
     /// Lower limit (rad or m).
     pub lower: f64,
@@ -87,6 +91,7 @@ pub struct JointLimits {
 /// Actuator effort limit (N·m or N, ≥ 0; `f64::INFINITY` when none): actuator
 /// torques are clamped to it.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[component(immutable)]
 pub struct EffortLimit(pub f64);
 
 impl Default for EffortLimit {
@@ -97,6 +102,7 @@ impl Default for EffortLimit {
 
 /// Velocity limit (rad/s or m/s, ≥ 0; `f64::INFINITY` when none).
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[component(immutable)]
 pub struct VelocityLimit(pub f64);
 
 impl Default for VelocityLimit {
@@ -107,17 +113,21 @@ impl Default for VelocityLimit {
 
 /// Viscous joint damping (N·m·s/rad or N·s/m, ≥ 0).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct JointDamping(pub f64);
 
 /// Coulomb joint friction (N·m or N, ≥ 0).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct JointFriction(pub f64);
 
 /// Reflected rotor inertia added to the joint's diagonal of M (kg·m² or kg, ≥ 0).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct JointArmature(pub f64);
 
 /// A spring–damper on the joint's coordinate, at rest at zero (a compliant
 /// payload's force element); absent on ordinary joints.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[component(immutable)]
 pub struct SpringDamper(pub quadsim_engine::description::JointSpring);

@@ -14,6 +14,13 @@
 //! change, never inside a step; the packed [`RobotBatch`] is the authoritative
 //! state, and [`LinkPose`] is only a copy of it for publishing.
 //!
+//! The description components of links, joints and shapes are immutable
+//! (`#[component(immutable)]`): an edit inserts a new value
+//! (`world.entity_mut(link).insert(Mass(4.0))`). Every insert fires bevy's
+//! lifecycle observers, so the compile stage learns of edits as they happen
+//! instead of scanning every part's change ticks on every step (which cost
+//! 8 % of a trotting quad16's step).
+//!
 //! # Examples
 //! ```
 //! use bevy_ecs::prelude::*;
@@ -30,13 +37,11 @@
 //! let root = spawn_robot(&mut world, &desc);
 //! assert_eq!(describe_robot(&world, root).unwrap().total_mass_kg(), 3.0);
 //!
-//! // edit the arm's mass on its entity; the description follows
-//! let mut q = world.query::<(&Link, &mut Mass)>();
-//! for (link, mut mass) in q.iter_mut(&mut world) {
-//!     if link.name == "arm" {
-//!         mass.0 = 4.0;
-//!     }
-//! }
+//! // edit the arm's mass on its entity (description components are
+//! // immutable: an edit inserts a new value); the description follows
+//! let mut q = world.query::<(Entity, &Link)>();
+//! let arm = q.iter(&world).find(|(_, l)| l.name == "arm").unwrap().0;
+//! world.entity_mut(arm).insert(Mass(4.0));
 //! assert_eq!(describe_robot(&world, root).unwrap().total_mass_kg(), 5.0);
 //! ```
 

@@ -7,6 +7,7 @@ use quadsim_engine::spatial::Transform;
 /// A rigid link of a robot. Its geometry lives on separate [`crate::Collider`]
 /// and [`crate::Visual`] entities attached to it.
 #[derive(Component, Clone, Debug, PartialEq)]
+#[component(immutable)]
 #[require(Mass, CenterOfMass, ComputedInertia, LinkPose)]
 pub struct Link {
     /// Unique name within the robot (URDF `<link name>`).
@@ -15,16 +16,19 @@ pub struct Link {
 
 /// Mass of a link (kg, ≥ 0).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct Mass(pub f64);
 
 /// Centre of mass (m, link frame).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct CenterOfMass(pub DVec3);
 
 /// Rotational inertia set by the user or the URDF (kg·m², about the CoM, link
 /// axes). Absent: the compile stage derives one from the first collision (else
 /// visual) shape and the mass into [`ComputedInertia`].
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[component(immutable)]
 pub struct Inertia(pub DMat3);
 
 /// The rotational inertia the compiled model uses (kg·m², about the CoM, link
@@ -42,6 +46,7 @@ impl Default for ComputedInertia {
 /// Marks a foot link (a contact point for the ground model and the gait).
 /// Brings its [`FootContact`] along.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[component(immutable)]
 #[require(FootContact)]
 pub struct Foot;
 
@@ -61,6 +66,7 @@ pub struct FootContact {
 
 /// Contact point of a foot (m, link frame); absent: the link origin.
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+#[component(immutable)]
 pub struct FootPoint(pub DVec3);
 
 /// World pose of the link frame (`p_world = rot · p_link + trans`), copied

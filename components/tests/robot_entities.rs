@@ -204,12 +204,9 @@ fn edited_components_change_the_description() {
     let d = rich_description();
     let mut world = World::new();
     let root = spawn_robot(&mut world, &d);
-    let mut q = world.query::<(&Link, &mut Mass)>();
-    for (link, mut mass) in q.iter_mut(&mut world) {
-        if link.name == "thigh" {
-            mass.0 = 4.0;
-        }
-    }
+    let mut q = world.query::<(Entity, &Link)>();
+    let thigh = q.iter(&world).find(|(_, l)| l.name == "thigh").unwrap().0;
+    world.entity_mut(thigh).insert(Mass(4.0));
     let mut feet = world.query_filtered::<Entity, With<Foot>>();
     let foot = feet.single(&world).unwrap();
     world.entity_mut(foot).remove::<Foot>();
@@ -226,12 +223,16 @@ fn joint_to_another_robots_link_is_a_typed_error() {
     let a = spawn_robot(&mut world, &d);
     let b = spawn_robot(&mut world, &d);
     let b_link = world.get::<RobotParts>(b).unwrap().iter().next().unwrap();
-    let mut joints = world.query::<(&Joint, &BelongsTo, &mut JointConnection)>();
-    for (joint, owner, mut conn) in joints.iter_mut(&mut world) {
-        if owner.0 == a && joint.name == "knee" {
-            conn.child = b_link;
-        }
-    }
+    let mut joints = world.query::<(Entity, &Joint, &BelongsTo, &JointConnection)>();
+    let (knee, conn) = joints
+        .iter(&world)
+        .find(|(_, joint, owner, _)| owner.0 == a && joint.name == "knee")
+        .map(|(e, _, _, c)| (e, *c))
+        .unwrap();
+    world.entity_mut(knee).insert(JointConnection {
+        child: b_link,
+        ..conn
+    });
     assert_eq!(
         describe_robot(&world, a),
         Err(DescribeError::ForeignLink {

@@ -2,7 +2,8 @@
 //! schedule that runs before the step schedule, never inside a step.
 //!
 //! [`mark_dirty_robots`] finds robots whose description components changed
-//! (bevy change detection, plus removals); [`compile_dirty_robots`] reads their
+//! (bevy change detection on the roots, observers of inserts on the parts,
+//! plus removals); [`compile_dirty_robots`] reads their
 //! entities back with [`describe_robot_with_links`], compiles a
 //! [`Model`] and installs it in the [`RobotBatch`]. A robot that does not
 //! compile gets a [`CompileFailure`] and keeps its last valid model.
@@ -14,9 +15,9 @@ use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleT
 use quadsim_components::{
     BelongsTo, CenterOfMass, Collider, ColliderOf, CompileError, CompileFailure, ComputedInertia,
     ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointActuators, JointArmature,
-    JointConnection, JointDamping, JointFriction, JointLimits, JointPlacement, Link, LinkColliders,
-    LinkVisuals, Mass, Robot, RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts,
-    RobotSim, SimConfig, SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
+    JointConnection, JointDamping, JointFriction, JointLimits, JointPlacement, Link, Mass, Robot,
+    RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim, SimConfig,
+    SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
 };
 use quadsim_engine::Model;
 use quadsim_engine::actuator_model::{ActuatorBank, ActuatorKind, add_reflected_inertia};
@@ -31,6 +32,9 @@ pub struct CompileSchedule;
 pub struct DirtyRobots {
     /// Roots whose description changed (may repeat).
     pub robots: Vec<Entity>,
+    /// Link, joint and shape entities whose description components were
+    /// inserted since the last compile ([`note_part_edit`]; may repeat).
+    pub parts: Vec<Entity>,
     /// A robot was despawned: drop its slot and renumber [`RobotIndex`].
     pub prune: bool,
 }
@@ -116,39 +120,69 @@ type RootChanged = Or<(
     Changed<JointActuators>,
 )>;
 
-/// Components of a link entity whose change triggers a recompile.
-type LinkChanged = Or<(
-    Changed<Link>,
-    Changed<Mass>,
-    Changed<CenterOfMass>,
-    Changed<Inertia>,
-    Changed<Foot>,
-    Changed<FootPoint>,
-    Changed<LinkColliders>,
-    Changed<LinkVisuals>,
-)>;
+/// The description components of link, joint and shape entities. They are
+/// immutable, so an edit is an insert, which [`note_part_edit`] sees; the
+/// compile stage then resolves the edited entities to their robots.
+type PartComponents = (
+    (Link, Mass, CenterOfMass, Inertia, Foot, FootPoint),
+    (
+        Joint,
+        JointPlacement,
+        JointConnection,
+        JointLimits,
+        EffortLimit,
+        VelocityLimit,
+        JointDamping,
+        JointFriction,
+        JointArmature,
+        SpringDamper,
+    ),
+    (Collider, Visual, ColliderOf, VisualOf),
+);
 
-/// Components of a joint entity whose change triggers a recompile.
-type JointChanged = Or<(
-    Changed<Joint>,
-    Changed<JointPlacement>,
-    Changed<JointConnection>,
-    Changed<JointLimits>,
-    Changed<EffortLimit>,
-    Changed<VelocityLimit>,
-    Changed<JointDamping>,
-    Changed<JointFriction>,
-    Changed<JointArmature>,
-    Changed<SpringDamper>,
-)>;
+/// Observer: a description component of a link, joint, collider or visual
+/// entity was inserted (spawned or edited). The entity waits in
+/// [`DirtyRobots::parts`] for [`mark_dirty_robots`] (its robot may not be
+/// attached yet while it is being spawned).
+pub fn note_part_edit(edit: On<Insert<PartComponents>>, mut dirty: ResMut<DirtyRobots>) {
+    if dirty.parts.last() != Some(&edit.entity) {
+        dirty.parts.push(edit.entity);
+    }
+}
 
-/// A collider or visual entity whose shape changed, with the link it belongs to.
-type ShapeChanged<'w, 's> = Query<
-    'w,
-    's,
-    (Option<&'static ColliderOf>, Option<&'static VisualOf>),
-    Or<(Changed<Collider>, Changed<Visual>)>,
->;
+/// Observer: a collider or visual leaves its link (despawned or moved): the
+/// link's robot is marked now, while the shape still points at the link.
+pub fn note_shape_detach(
+    detach: On<Discard<(ColliderOf, VisualOf)>>,
+    shapes: Query<(Option<&ColliderOf>, Option<&VisualOf>)>,
+    owners: Query<&BelongsTo>,
+    mut dirty: ResMut<DirtyRobots>,
+) {
+    if let Some(owner) = part_owner(detach.entity, &shapes, &owners) {
+        dirty.robots.push(owner);
+    }
+}
+
+/// Registers [`note_part_edit`] and [`note_shape_detach`] (once per world,
+/// before any robot is spawned).
+pub fn add_edit_observers(world: &mut World) {
+    world.add_observer(note_part_edit);
+    world.add_observer(note_shape_detach);
+}
+
+/// The robot a link, joint, collider or visual entity belongs to.
+fn part_owner(
+    e: Entity,
+    shapes: &Query<(Option<&ColliderOf>, Option<&VisualOf>)>,
+    owners: &Query<&BelongsTo>,
+) -> Option<Entity> {
+    if let Ok(b) = owners.get(e) {
+        return Some(b.0);
+    }
+    let (collider_of, visual_of) = shapes.get(e).ok()?;
+    let link = collider_of.map(|c| c.0).or(visual_of.map(|v| v.0))?;
+    owners.get(link).ok().map(|b| b.0)
+}
 
 /// Optional description components whose removal changes the description.
 type Removals<'w, 's> = (
@@ -161,15 +195,19 @@ type Removals<'w, 's> = (
     RemovedComponents<'w, 's, SpringDamper>,
 );
 
-/// Collects the robots whose description changed since the last run. A
-/// changed [`SimConfig`] (gravity, passive model) marks every robot.
+/// Collects the robots whose description changed since the last run: roots
+/// by bevy change detection (one entity per robot), parts from the
+/// [`note_part_edit`] observer, plus removals. A changed [`SimConfig`]
+/// (gravity, passive model) marks every robot. With nothing edited, this
+/// costs a few instructions per robot (the roots' change ticks), not a scan
+/// of every part.
+#[allow(clippy::too_many_arguments)]
 pub fn mark_dirty_robots(
     mut dirty: ResMut<DirtyRobots>,
     config: Res<SimConfig>,
     all_roots: Query<Entity, With<Robot>>,
     roots: Query<Entity, (With<Robot>, RootChanged)>,
-    parts: Query<&BelongsTo, Or<(LinkChanged, JointChanged)>>,
-    shapes: ShapeChanged,
+    shapes: Query<(Option<&ColliderOf>, Option<&VisualOf>)>,
     owners: Query<&BelongsTo>,
     mut removed: Removals,
     mut removed_robots: RemovedComponents<Robot>,
@@ -178,11 +216,10 @@ pub fn mark_dirty_robots(
         dirty.robots.extend(all_roots.iter());
     }
     dirty.robots.extend(roots.iter());
-    dirty.robots.extend(parts.iter().map(|b| b.0));
-    for (collider_of, visual_of) in &shapes {
-        let link = collider_of.map(|c| c.0).or(visual_of.map(|v| v.0));
-        if let Some(owner) = link.and_then(|l| owners.get(l).ok()) {
-            dirty.robots.push(owner.0);
+    let DirtyRobots { robots, parts, .. } = &mut *dirty;
+    for e in parts.drain(..) {
+        if let Some(owner) = part_owner(e, &shapes, &owners) {
+            robots.push(owner);
         }
     }
     let (r0, r1, r2, r3, r4, r5, r6) = &mut removed;

@@ -23,8 +23,8 @@ mod simulation;
 mod step;
 
 pub use compile::{
-    CompileSchedule, DirtyRobots, SharedModels, build_compile_schedule, compile_dirty_robots,
-    mark_dirty_robots,
+    CompileSchedule, DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule,
+    compile_dirty_robots, mark_dirty_robots,
 };
 pub use contact::{height_above_ground, observe_robot, update_contacts};
 pub use control::{control_robot, control_robot_at, run_controllers};

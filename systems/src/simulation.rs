@@ -10,7 +10,7 @@ use quadsim_components::{
 use quadsim_engine::BaseKind;
 use quadsim_engine::description::RobotDescription;
 
-use crate::compile::{DirtyRobots, SharedModels, build_compile_schedule};
+use crate::compile::{DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule};
 use crate::publish::sync_link_poses;
 use crate::schedule::build_step_schedule;
 
@@ -62,6 +62,7 @@ impl Simulation {
         world.init_resource::<RobotBatch>();
         world.init_resource::<PoseSync>();
         world.init_resource::<DirtyRobots>();
+        add_edit_observers(&mut world);
         world.init_resource::<SharedModels>();
         world.init_resource::<quadsim_components::LaneBatching>();
         world.init_resource::<Ground>();

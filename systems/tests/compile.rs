@@ -95,7 +95,7 @@ fn editing_mass_recompiles_outside_the_step() {
     assert!((holding_force_n(&before) - 4.5 * 9.81).abs() < 1e-12);
 
     let lower = link_entity(&mut sim, "lower");
-    sim.world.get_mut::<Mass>(lower).unwrap().0 = 2.0;
+    sim.world.entity_mut(lower).insert(Mass(2.0));
 
     // The step schedule alone never compiles: same model, state keeps moving.
     sim.run_step_schedule();
@@ -150,7 +150,7 @@ fn invalid_edit_is_reported_and_keeps_the_last_model() {
     let root = sim.spawn_robot(&pendulum()).unwrap();
     let model = sim.robot(root).unwrap().model.clone();
     let lower = link_entity(&mut sim, "lower");
-    sim.world.get_mut::<Mass>(lower).unwrap().0 = -1.0;
+    sim.world.entity_mut(lower).insert(Mass(-1.0));
     sim.step();
     match sim.world.get::<CompileFailure>(root) {
         Some(CompileFailure(CompileError::Model {
@@ -168,7 +168,7 @@ fn invalid_edit_is_reported_and_keeps_the_last_model() {
     assert_eq!(sim.clock().step, 1);
 
     // fixing the edit clears the failure
-    sim.world.get_mut::<Mass>(lower).unwrap().0 = 0.7;
+    sim.world.entity_mut(lower).insert(Mass(0.7));
     sim.step();
     assert!(sim.world.get::<CompileFailure>(root).is_none());
     assert!((sim.robot(root).unwrap().model.total_mass - 4.7).abs() < 1e-15);
@@ -258,7 +258,7 @@ fn robots_of_one_articulation_share_one_model() {
             .0
     };
     let mass_kg = sim.world.get::<Mass>(torso).unwrap().0;
-    sim.world.get_mut::<Mass>(torso).unwrap().0 = mass_kg + 1.0;
+    sim.world.entity_mut(torso).insert(Mass(mass_kg + 1.0));
     sim.compile();
     let b = model(&sim, roots[1]);
     assert!(!Arc::ptr_eq(&a, &b));
@@ -266,11 +266,74 @@ fn robots_of_one_articulation_share_one_model() {
     assert!(Arc::ptr_eq(&a, &model(&sim, roots[2])));
     drop(b);
     // Setting it back shares the first model again.
-    sim.world.get_mut::<Mass>(torso).unwrap().0 = mass_kg;
+    sim.world.entity_mut(torso).insert(Mass(mass_kg));
     sim.compile();
     assert!(Arc::ptr_eq(&a, &model(&sim, roots[1])));
     assert_eq!(
         sim.world.resource::<quadsim_systems::SharedModels>().len(),
         2
     );
+}
+
+/// The compile stage learns of part edits from insert observers (the
+/// description components are immutable): a joint edit, a shape edit and a
+/// shape's despawn each recompile their own robot, and only it.
+#[test]
+fn joint_and_shape_edits_recompile_only_their_robot() {
+    use quadsim_components::{BelongsTo, Collider, ColliderOf, Joint, JointDamping};
+    use quadsim_engine::description::Geometry;
+
+    let mut sim = Simulation::new(SimConfig::default(), 1).unwrap();
+    let a = sim.spawn_robot(&pendulum()).unwrap();
+    let b = sim.spawn_robot(&pendulum()).unwrap();
+    sim.run(2);
+    let m0 = sim.robot(b).unwrap().model.clone();
+    assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &m0));
+
+    // a joint edit on robot a
+    let mut joints = sim.world.query::<(Entity, &Joint, &BelongsTo)>();
+    let elbow_a = joints
+        .iter(&sim.world)
+        .find(|(_, j, o)| o.0 == a && j.name == "elbow")
+        .unwrap()
+        .0;
+    sim.world.entity_mut(elbow_a).insert(JointDamping(0.3));
+    sim.step();
+    let ma = sim.robot(a).unwrap().model.clone();
+    assert!(ma.damping.contains(&0.3));
+    assert!(Arc::ptr_eq(&sim.robot(b).unwrap().model, &m0));
+
+    // robot b's base box doubled: its derived inertia grows
+    let mut links = sim.world.query::<(Entity, &Link, &BelongsTo)>();
+    let base_b = links
+        .iter(&sim.world)
+        .find(|(_, l, o)| o.0 == b && l.name == "base")
+        .unwrap()
+        .0;
+    let mut colliders = sim.world.query::<(Entity, &ColliderOf)>();
+    let collider_b = colliders
+        .iter(&sim.world)
+        .find(|(_, c)| c.0 == base_b)
+        .unwrap()
+        .0;
+    sim.world
+        .entity_mut(collider_b)
+        .insert(Collider::new(Geometry {
+            origin: Transform::IDENTITY,
+            shape: Shape::Box {
+                size_m: DVec3::new(0.8, 0.4, 0.2),
+            },
+        }));
+    sim.step();
+    let mb = sim.robot(b).unwrap().model.clone();
+    assert!(mb.inertia[0].inertia_com.x_axis.x > 3.9 * m0.inertia[0].inertia_com.x_axis.x);
+    assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &ma));
+
+    // its collider despawned: the inertia comes from the visual box again
+    sim.world.despawn(collider_b);
+    sim.step();
+    let mb2 = sim.robot(b).unwrap().model.clone();
+    assert!(!Arc::ptr_eq(&mb2, &mb));
+    assert_eq!(mb2.inertia, m0.inertia);
+    assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &ma));
 }
