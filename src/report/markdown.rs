@@ -402,6 +402,57 @@ fn study_b(out: &mut String, r: &Value, notes: &mut Notes) {
     table(out, &["quantity", "Study B", "quadsim"], &rows);
 }
 
+/// Which state each robot's controller read, and for robots with a base
+/// estimator how far its estimate was from the simulator's ground truth
+/// (`summary.json`'s `sensing`; definitions in scenarios/README.md).
+fn sensing(out: &mut String, robots: &[&Value]) {
+    let _ = writeln!(
+        out,
+        "\n## Sensing and state estimation\n\nThe state each controller read: `estimated` (the base estimator, encoders and contact sensors) or `ground_truth` (the simulator's exact state, which no real robot has). Estimation error: the estimate against ground truth at each estimator update.\n"
+    );
+    let rows: Vec<Vec<String>> = robots
+        .iter()
+        .map(|r| {
+            let s = &r["sensing"];
+            let source = s["state_source"].as_str().unwrap_or("?");
+            let mut row = vec![
+                format!("`{}`", r["name"].as_str().unwrap_or("?")),
+                if source == "ground_truth" {
+                    "**ground truth**".to_string()
+                } else {
+                    source.to_string()
+                },
+            ];
+            let e = &s["estimation"];
+            for (key, d) in [
+                ("tilt_rad", 4),
+                ("orientation_rad", 4),
+                ("velocity_mps", 3),
+                ("height_m", 4),
+            ] {
+                row.push(if e.is_null() {
+                    "–".into()
+                } else {
+                    format!("{} / {}", num(&e[key]["rms"], d), num(&e[key]["max"], d))
+                });
+            }
+            row
+        })
+        .collect();
+    table(
+        out,
+        &[
+            "robot",
+            "controller read",
+            "tilt error RMS / max (rad)",
+            "orientation error RMS / max (rad)",
+            "velocity error RMS / max (m/s)",
+            "height error RMS / max (m)",
+        ],
+        &rows,
+    );
+}
+
 /// The whole `report.md`. `figures` lists, per robot, the plots written
 /// (caption, file stem under `plots/`).
 pub fn report_markdown(
@@ -507,6 +558,8 @@ pub fn report_markdown(
         table(&mut out, &["joint", "peak", "time-mean"], &rows);
     }
 
+    sensing(&mut out, &robots);
+
     let _ = writeln!(out, "\n## Plots\n");
     if input.log.is_none() {
         let _ = writeln!(
@@ -596,6 +649,34 @@ mod tests {
             log: None,
         };
         assert!(!report_markdown(&input, &[]).contains("push"));
+    }
+
+    #[test]
+    fn the_state_read_and_the_estimation_error_are_reported() {
+        let err = |rms: f64, max: f64| json!({"rms": rms, "max": max});
+        let s = json!({"scenario": "t", "robots": [
+            {"name": "est", "sensing": {"state_source": "estimated", "estimation": {
+                "updates": 10, "tilt_rad": err(0.0277, 0.0759),
+                "orientation_rad": err(0.0278, 0.076), "velocity_mps": err(0.113, 0.572),
+                "height_m": err(0.0057, 0.0221)}}},
+            {"name": "gt", "sensing": {"state_source": "ground_truth", "estimation": null}},
+        ]});
+        let input = ReportInput {
+            summary: &s,
+            scenario_text: SCN,
+            log: None,
+        };
+        let md = report_markdown(&input, &[]);
+        assert!(
+            md.contains(
+                "| `est` | estimated | 0.0277 / 0.0759 | 0.0278 / 0.0760 | 0.113 / 0.572 | 0.0057 / 0.0221 |"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains("| `gt` | **ground truth** | – | – | – | – |"),
+            "{md}"
+        );
     }
 
     #[test]
