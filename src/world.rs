@@ -74,6 +74,16 @@ pub struct Overrides {
     pub threads: usize,
 }
 
+impl Overrides {
+    /// The scenario as written, on `threads` worker threads (0: one per core).
+    pub fn with_threads(threads: usize) -> Self {
+        Self {
+            threads,
+            ..Self::default()
+        }
+    }
+}
+
 /// Builds the world. Errors name the scenario file, line and key path (for a
 /// herd robot's varied value, its `vary` entry).
 pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError> {

@@ -33,13 +33,7 @@ fn with_actuators(table: &str) -> String {
 
 fn build(src: &str) -> Result<World, ScenarioError> {
     let scn = parse_scenario(Path::new("act.toml"), src.to_string())?;
-    build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
+    build_world(&scn, Overrides::with_threads(1))
 }
 
 fn line_of(src: &str, needle: &str) -> usize {

@@ -36,14 +36,7 @@ fn rigid(src: &str) -> String {
 
 fn world(src: &str) -> World {
     let scn = parse_scenario(Path::new("trot_slosh.toml"), src.to_string()).unwrap();
-    build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap()
+    build_world(&scn, Overrides::with_threads(1)).unwrap()
 }
 
 /// What a 10 s trot did: the metrics summary, and the load's largest

@@ -357,14 +357,7 @@ kind = \"vmc\"
             .replace("extent_m = [10.0, 10.0]", "extent_m = [30.0, 12.0]")
     );
     let scn = parse(&src).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 2,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(2)).unwrap();
     assert_eq!(w.robots.len(), 100);
     w.sim.run(w.steps);
     let mut fallen = Vec::new();

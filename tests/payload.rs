@@ -46,14 +46,7 @@ offset_m = [0.0, 0.0, 0.1]
 #[test]
 fn a_trotting_quad16_carrying_ten_kilograms_keeps_walking() {
     let scn = parse_scenario(Path::new("p.toml"), scenario(10.0, BOX)).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let rex = w.robots[0].1;
     let bare = quadsim_engine::robots::builtin("quad16").unwrap();
     let bare =
@@ -86,14 +79,7 @@ fn attach_and_detach_events_change_the_model_at_their_times() {
                       \n[[events]]\nt_s = 0.5\nrobot = \"rex\"\nkind = \"detach\"\npayload = \"box\"\n";
         let src = scenario(0.75, &(payload + events));
         let scn = parse_scenario(Path::new("p.toml"), src).unwrap();
-        let mut w = build_world(
-            &scn,
-            Overrides {
-                threads: 1,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
         let rex = w.robots[0].1;
         let mass = |w: &quadsim::world::World| {
             let r = w.sim.robot(rex).unwrap();

@@ -133,14 +133,7 @@ start_yaw_deg = 30.0
 start_position_m = [0.0, 0.0, 100.6]
 "#;
     let scn = parse_scenario(Path::new("coast.toml"), src.to_string()).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let root = w.robots[0].1;
     {
         // base velocity in the base frame: 1 m/s along the base's own x (= heading)

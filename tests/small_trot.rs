@@ -40,14 +40,7 @@ fn trend_and_oscillation(t: &[f64], x: &[f64]) -> (f64, f64) {
 #[test]
 fn quad12_trots_forward_as_in_study_b() {
     let scn = load_scenario(Path::new("scenarios/small_trot.toml")).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let root = w.robots[0].1;
     let (mut t, mut com) = (Vec::new(), Vec::new());
     let (mut margin3_min, mut margin3_sum, mut margin3_n) = (f64::INFINITY, 0.0, 0);
@@ -176,14 +169,7 @@ fn quad12_trots_under_prescribed_pd() {
         .replace("mode = \"hybrid\"", "mode = \"pd\"")
         .replace("controller_rate_hz = 500", "controller_rate_hz = 2000");
     let scn = parse_scenario(Path::new("small_trot_pd.toml"), text).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     w.sim.run(w.steps);
     let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
     eprintln!(

@@ -52,14 +52,7 @@ fn max_of(js: &[&Value], key: &str) -> f64 {
 #[test]
 fn study_b_servo_falls_short_of_quad12s_knee_torque() {
     let scn = load_scenario(Path::new(FILE)).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let r = run(&mut w);
     let k = knees(&r);
     assert_eq!(k.len(), 4);
@@ -117,14 +110,7 @@ fn a_ten_newton_metre_servo_carries_the_same_trot() {
     );
     assert!(src.contains("stall_torque_nm = 10.0"));
     let scn = parse_scenario(Path::new(FILE), src).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let r = run(&mut w);
     let k = knees(&r);
     let demand = max_of(&k, "peak_demand_nm");

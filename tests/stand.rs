@@ -37,14 +37,7 @@ model = "quad16"
 /// Parses `src` (named `path` in errors) and builds its world on one thread.
 fn one_thread_world(path: &Path, src: String) -> World {
     let scn = parse_scenario(path, src).unwrap();
-    build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap()
+    build_world(&scn, Overrides::with_threads(1)).unwrap()
 }
 
 const PD: &str = r#"[robots.controller]

@@ -7,19 +7,28 @@
 use std::path::Path;
 
 use quadsim::scenario::load_scenario;
-use quadsim::world::{Overrides, build_world};
+use quadsim::world::{Overrides, World, build_world};
+use quadsim_engine::metrics::MetricsSummary;
+
+/// The scenario file's world, on one thread.
+fn world(path: &str) -> World {
+    build_world(
+        &load_scenario(Path::new(path)).unwrap(),
+        Overrides::with_threads(1),
+    )
+    .unwrap()
+}
+
+/// Roll and pitch stayed inside ±`bound_rad`.
+fn assert_attitude_within(m: &MetricsSummary, bound_rad: f64) {
+    for (what, r) in [("roll", m.roll_range_rad), ("pitch", m.pitch_range_rad)] {
+        assert!(r[0] > -bound_rad && r[1] < bound_rad, "{what} range {r:?}");
+    }
+}
 
 #[test]
 fn quad16_trots_at_half_a_metre_per_second() {
-    let scn = load_scenario(Path::new("scenarios/trot.toml")).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = world("scenarios/trot.toml");
     w.sim.run(w.steps);
     let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
     assert!(!m.fell, "fell at {:?}", m.fell_at_s);
@@ -28,9 +37,7 @@ fn quad16_trots_at_half_a_metre_per_second() {
         "mean speed {}",
         m.mean_forward_speed_mps
     );
-    for (what, r) in [("roll", m.roll_range_rad), ("pitch", m.pitch_range_rad)] {
-        assert!(r[0] > -0.1 && r[1] < 0.1, "{what} range {r:?}");
-    }
+    assert_attitude_within(&m, 0.1);
     assert!(m.steps > 60, "{} touchdowns in 10 s of trotting", m.steps);
 }
 
@@ -44,15 +51,7 @@ fn quad16_trots_at_half_a_metre_per_second() {
 /// (docs/walking.md); this checks the nominal start.
 #[test]
 fn quad16_trots_at_study_a_reported_mean_speed() {
-    let scn = load_scenario(Path::new("scenarios/trot_study_mean.toml")).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut w = world("scenarios/trot_study_mean.toml");
     w.sim.run(w.steps);
     let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
     assert!(!m.fell, "fell at {:?}", m.fell_at_s);
@@ -61,9 +60,7 @@ fn quad16_trots_at_study_a_reported_mean_speed() {
         "mean speed {}",
         m.mean_forward_speed_mps
     );
-    for (what, r) in [("roll", m.roll_range_rad), ("pitch", m.pitch_range_rad)] {
-        assert!(r[0] > -0.2 && r[1] < 0.2, "{what} range {r:?}");
-    }
+    assert_attitude_within(&m, 0.2);
 }
 
 /// Study A's experiment, `scenarios/trot_flat.toml`: commanded 1.5 m/s with
@@ -75,16 +72,8 @@ fn quad16_trots_at_study_a_reported_mean_speed() {
 /// 1.2 m/s), see docs/walking.md.
 #[test]
 fn trot_flat_holds_study_a_command_for_ten_seconds() {
-    let scn = load_scenario(Path::new("scenarios/trot_flat.toml")).unwrap();
-    let mut w = build_world(
-        &scn,
-        Overrides {
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let dt_s: f64 = scn.file.world.dt_s;
+    let mut w = world("scenarios/trot_flat.toml");
+    let dt_s = w.sim.world.resource::<quadsim_components::SimConfig>().dt_s;
     let steps_3s = (3.0 / dt_s).round() as u64;
     assert!(w.steps > steps_3s, "the scenario runs {} steps", w.steps);
     let id = w.robots[0].1;
@@ -97,7 +86,5 @@ fn trot_flat_holds_study_a_command_for_ten_seconds() {
     assert!(!m.fell, "fell at {:?}", m.fell_at_s);
     let mean_mps = (x10 - x3) / (w.steps - steps_3s) as f64 / dt_s;
     assert!(mean_mps >= 1.0, "mean speed over [3, 10] s {mean_mps} m/s");
-    for (what, r) in [("roll", m.roll_range_rad), ("pitch", m.pitch_range_rad)] {
-        assert!(r[0] > -0.2 && r[1] < 0.2, "{what} range {r:?}");
-    }
+    assert_attitude_within(&m, 0.2);
 }

@@ -623,16 +623,23 @@ mod tests {
 
     const SCN: &str = "format_version = 1\n[[robots]]\nname = \"rex\"\nmodel = \"quad16\"\n";
 
+    /// The report of `summary` for [`SCN`], without a log or figures.
+    fn md_of(summary: &Value) -> String {
+        report_markdown(
+            &ReportInput {
+                summary,
+                scenario_text: SCN,
+                log: None,
+            },
+            &[],
+        )
+    }
+
     #[test]
     fn push_recovery_is_a_row_when_present_and_absent_otherwise() {
         let with = summary(json!({"name": "rex", "energy_per_step_j": 12.0,
             "push_recovery": {"max_impulse_ns": 15.0, "force_n": 150.0, "duration_s": 0.1}}));
-        let input = ReportInput {
-            summary: &with,
-            scenario_text: SCN,
-            log: None,
-        };
-        let md = report_markdown(&input, &[]);
+        let md = md_of(&with);
         assert!(
             md.contains("| largest push recovered from (N·s) | 15.00 (150.0 N for 0.100 s) |"),
             "{md}"
@@ -643,12 +650,7 @@ mod tests {
         );
         assert!(md.contains("the study reports no push experiment"));
         let without = summary(json!({"name": "rex", "energy_per_step_j": 12.0}));
-        let input = ReportInput {
-            summary: &without,
-            scenario_text: SCN,
-            log: None,
-        };
-        assert!(!report_markdown(&input, &[]).contains("push"));
+        assert!(!md_of(&without).contains("push"));
     }
 
     #[test]
@@ -661,12 +663,7 @@ mod tests {
                 "height_m": err(0.0057, 0.0221)}}},
             {"name": "gt", "sensing": {"state_source": "ground_truth", "estimation": null}},
         ]});
-        let input = ReportInput {
-            summary: &s,
-            scenario_text: SCN,
-            log: None,
-        };
-        let md = report_markdown(&input, &[]);
+        let md = md_of(&s);
         assert!(
             md.contains(
                 "| `est` | estimated | 0.0277 / 0.0759 | 0.0278 / 0.0760 | 0.113 / 0.572 | 0.0057 / 0.0221 |"
@@ -683,12 +680,7 @@ mod tests {
     fn a_missing_value_is_a_dash_with_a_footnote_saying_why() {
         let s =
             summary(json!({"name": "rex", "joint_rms_error_rad": null, "energy_per_step_j": null}));
-        let input = ReportInput {
-            summary: &s,
-            scenario_text: SCN,
-            log: None,
-        };
-        let md = report_markdown(&input, &[]);
+        let md = md_of(&s);
         assert!(
             md.contains("| joint tracking RMS (rad) | 0.05 | —[^1-1] |"),
             "{md}"
