@@ -1,7 +1,7 @@
 //! The sampling behind the log and the live monitor reads the kinematics the
 //! step left in each robot's `Data` instead of computing them again
 //! (`quadsim_systems::log`, `prepare`), and the monitor writes its frames
-//! straight from borrowed views. Over trotting runs, every sample and every
+//! straight from borrowed views, as records on the thread pool. Over trotting runs, every sample and every
 //! frame must equal, bit for bit, one computed afresh at the sampled state
 //! (`with_fresh_views`: forward kinematics and contact evaluations in
 //! scratch). With semi-implicit Euler the robot's own kinematics must hold
@@ -16,8 +16,8 @@ use quadsim::cli::bench::herd_scenario;
 use quadsim::monitor::RobotFrame;
 use quadsim::scenario::parse_scenario;
 use quadsim::systems::{
-    LogChannel, LogRecord, LogSink, MonitorChannel, RobotSample, SampleView, finish_sampling,
-    start_sampling, with_fresh_views,
+    LogChannel, LogRecord, LogSink, MonitorChannel, Records, RobotSample, SampleView, ViewRecord,
+    finish_sampling, start_sampling, with_fresh_views,
 };
 use quadsim::world::{Overrides, World, build_world};
 
@@ -37,21 +37,28 @@ impl LogSink for Samples {
     }
 }
 
-/// Writes the monitor channel's views into frames kept from instant to
-/// instant (in place, as the publisher does).
+/// Keeps a frame per robot as its record, written in place from the
+/// robot's view on the pool (as the live monitor's sink does), and a copy
+/// of each instant's frames.
 struct Frames(Arc<Mutex<(u64, Vec<RobotFrame>)>>, f64);
 impl LogSink for Frames {
     fn send(&mut self, _: LogRecord) {}
-    fn takes_views(&self) -> bool {
+    fn takes_records(&self) -> bool {
         true
     }
-    fn send_views(&mut self, _t_ns: u64, step: u64, views: &[SampleView<'_>]) {
+    fn new_record(&self) -> ViewRecord {
+        Box::new(RobotFrame::default())
+    }
+    fn write_record(&self, record: &mut ViewRecord, step: u64, view: &SampleView<'_>) {
+        let f: &mut RobotFrame = record.downcast_mut().expect("a frame");
+        f.set_from_view(view, step, step as f64 * self.1);
+    }
+    fn send_records(&mut self, _t_ns: u64, step: u64, records: Records<'_>) {
         let mut got = self.0.lock().unwrap();
         got.0 = step;
-        got.1.resize(views.len(), RobotFrame::default());
-        for (f, v) in got.1.iter_mut().zip(views) {
-            f.set_from_view(v, step, step as f64 * self.1);
-        }
+        got.1.clear();
+        got.1
+            .extend(records.map(|r| *r.downcast_ref::<RobotFrame>().expect("a frame")));
     }
 }
 

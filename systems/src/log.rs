@@ -26,10 +26,10 @@
 //! due at that instant is simply absent from it.
 //!
 //! The sampling is cheap (a contact evaluation and a few copies, on the steps
-//! that sample or snapshot only; a sink taking [`SampleView`]s copies
-//! nothing; a sink keeping its own record per robot, such as the live
-//! monitor's frame, writes it on the thread pool beside the robot's
-//! sampling, [`LogSink::takes_records`]); encoding and compression happen in
+//! that sample or snapshot only; a sink keeping its own record per robot,
+//! such as the live monitor's frame, writes it from a borrowed
+//! [`SampleView`] on the thread pool beside the robot's sampling, with no
+//! sample made, [`LogSink::takes_records`]); encoding and compression happen in
 //! the sink, off the simulation thread.
 
 use std::sync::Arc;
@@ -60,27 +60,11 @@ pub trait LogSink: Send + Sync + 'static {
     /// Passes on whatever the sink holds back (the log is about to end).
     fn flush(&mut self) {}
 
-    /// Whether the sink takes each instant's samples as borrowed views
-    /// ([`LogSink::send_views`]: no copy, no allocation) instead of
-    /// [`LogRecord::Step`] records.
-    fn takes_views(&self) -> bool {
-        false
-    }
-
-    /// One instant's samples as views, in the logger's order, at step index
-    /// `step` (time `t_ns`); called instead of [`LogSink::send`] with a
-    /// [`LogRecord::Step`] when [`LogSink::takes_views`].
-    fn send_views(&mut self, t_ns: u64, step: u64, views: &[SampleView<'_>]) {
-        let _ = (t_ns, step, views);
-    }
-
     /// Whether the sink keeps its own record of each robot ([`ViewRecord`],
     /// made once per robot by [`LogSink::new_record`]), written from the
     /// robot's view by [`LogSink::write_record`] on the thread pool right
     /// after the robot is prepared, and handed over per instant by
-    /// [`LogSink::send_records`]. Takes precedence over
-    /// [`LogSink::takes_views`]: the sink then gets neither views nor
-    /// [`LogRecord::Step`] records.
+    /// [`LogSink::send_records`], instead of [`LogRecord::Step`] records.
     fn takes_records(&self) -> bool {
         false
     }
@@ -113,7 +97,7 @@ pub trait LogSink: Send + Sync + 'static {
     /// torso corners, which [`RobotSample::com_acceleration_mps2`] sums):
     /// then only the feet are evaluated, and its views'
     /// [`SampleView::evals`] hold the feet only. Applies to sinks that take
-    /// records or views.
+    /// records.
     fn feet_contacts_only(&self) -> bool {
         false
     }
@@ -792,9 +776,9 @@ fn view_of<'a>(
 }
 
 /// Samples every logged robot due at step index `j` and sends one record
-/// (or, to a sink that [takes views](LogSink::takes_views), the views; to
-/// one that [takes records](LogSink::takes_records), its records, each
-/// written right after its robot is prepared, on the same worker).
+/// (or, to a sink that [takes records](LogSink::takes_records), its
+/// records, each written right after its robot is prepared, on the same
+/// worker).
 /// Robots are prepared independently (each from its own snapshot and
 /// scratch), in parallel on the world's [`SimThreadPool`] for a herd, and
 /// collected in the logger's order, so the record does not depend on the
@@ -802,8 +786,7 @@ fn view_of<'a>(
 fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     let dt = world.resource::<quadsim_components::SimConfig>().dt_s;
     let takes_records = logger.sink.takes_records();
-    let takes_views = !takes_records && logger.sink.takes_views();
-    let feet_only = (takes_records || takes_views) && logger.sink.feet_contacts_only();
+    let feet_only = takes_records && logger.sink.feet_contacts_only();
     let mut jobs = Vec::new();
     // indices follow the `Robots` record, which lists robots that have a sim
     let mut index = 0;
@@ -849,7 +832,7 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
             let view = view_of(job.index, job.sim, job.cached, q, v, data, evals);
             let record = record.as_mut().expect("the logger made every record");
             sink.write_record(record, j, &view);
-        } else if !takes_views {
+        } else {
             let tf = C::LINK_TRANSFORMS.then_some(&job.robot.tf[..]);
             let sample = job.view().sample(tf);
             job.out = Some(sample);
@@ -864,11 +847,6 @@ fn sample_all<C: SampleChannel>(world: &World, logger: &mut Logger<C>, j: u64) {
     if takes_records {
         let records = Records { jobs: jobs.iter() };
         logger.sink.send_records(t_ns, j, records);
-        return;
-    }
-    if takes_views {
-        let views: Vec<SampleView<'_>> = jobs.iter().map(SampleJob::view).collect();
-        logger.sink.send_views(t_ns, j, &views);
         return;
     }
     let samples = jobs.into_iter().filter_map(|job| job.out).collect();
@@ -971,7 +949,7 @@ pub fn with_fresh_views<R>(
 /// and the sampler: everything a [`RobotSample`] holds, without a copy or an
 /// allocation. The log's sample is made from it ([`SampleView::to_sample`]);
 /// the live monitor writes its frames straight from views
-/// ([`LogSink::send_views`]), so both carry the same values bit for bit.
+/// ([`LogSink::write_record`]), so both carry the same values bit for bit.
 /// Frames as in [`RobotSample`].
 #[derive(Clone, Copy, Debug)]
 pub struct SampleView<'a> {
