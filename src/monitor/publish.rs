@@ -9,9 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
-use quadsim_systems::{
-    LogRecord, LogSink, Records, RobotInfo, RobotSample, SampleView, ViewRecord,
-};
+use quadsim_systems::{LogRecord, LogSink, Records, RobotInfo, SampleView, ViewRecord};
 use serde_json::json;
 
 use super::frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
@@ -143,40 +141,24 @@ impl FramePublisher {
     /// shared memory), one send. A failed loan or send drops the instant and
     /// counts it.
     pub fn publish_frames<'a>(&self, frames: impl ExactSizeIterator<Item = &'a RobotFrame>) {
-        let n = frames.len();
+        // late subscribers of the header get its last sample (history 1)
+        let _ = self.header.update_connections();
+        let Ok(sample) = self.frames.loan_slice_uninit(frames.len()) else {
+            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
+            return;
+        };
         let mut frames = frames.copied();
-        self.publish_with(n, |_| frames.next().expect("n frames"));
-    }
-
-    /// Publishes the sampled instant `tick` made of the log's `samples`.
-    pub fn publish(&self, tick: u64, samples: &[RobotSample]) {
-        let time_s = self.time_s(tick);
-        self.publish_with(samples.len(), |i| {
-            RobotFrame::from_sample(&samples[i], tick, time_s)
-        });
+        let sample = sample.write_from_fn(|_| frames.next().expect("as many frames as loaned"));
+        match sample.send() {
+            Ok(_) => self.stats.published.fetch_add(1, Ordering::Relaxed),
+            Err(_) => self.stats.dropped.fetch_add(1, Ordering::Relaxed),
+        };
     }
 
     /// Simulation time of step index `tick` (s), as frames carry it.
     #[inline]
     pub fn time_s(&self, tick: u64) -> f64 {
         tick as f64 * self.dt_s
-    }
-
-    /// One instant of `n` frames, frame `i` being `frame(i)` (called in
-    /// order), written straight into the loan, then sent.
-    #[inline]
-    fn publish_with(&self, n: usize, frame: impl FnMut(usize) -> RobotFrame) {
-        // late subscribers of the header get its last sample (history 1)
-        let _ = self.header.update_connections();
-        let Ok(sample) = self.frames.loan_slice_uninit(n) else {
-            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
-            return;
-        };
-        let sample = sample.write_from_fn(frame);
-        match sample.send() {
-            Ok(_) => self.stats.published.fetch_add(1, Ordering::Relaxed),
-            Err(_) => self.stats.dropped.fetch_add(1, Ordering::Relaxed),
-        };
     }
 
     /// Publishes the header describing `robots` (JSON, see docs/monitor.md).
@@ -274,10 +256,8 @@ impl LogSink for MonitorSink {
     fn send(&mut self, record: LogRecord) {
         match record {
             LogRecord::Robots { robots, .. } => self.publisher.publish_header(&robots),
-            LogRecord::Step { t_ns, samples } => {
-                let tick = (t_ns as f64 * 1e-9 / self.publisher.dt_s).round() as u64;
-                self.publisher.publish(tick, &samples);
-            }
+            // never sent: the sink takes records (`send_records`)
+            LogRecord::Step { .. } => {}
         }
     }
 }
