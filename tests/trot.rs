@@ -26,18 +26,26 @@ fn assert_attitude_within(m: &MetricsSummary, bound_rad: f64) {
     }
 }
 
-#[test]
-fn quad16_trots_at_half_a_metre_per_second() {
-    let mut w = world("scenarios/trot.toml");
+/// Runs the scenario file's whole duration and checks its one robot did
+/// not fall, trotted at a mean forward speed within `tol_mps` of `v_mps`,
+/// and kept roll and pitch inside ±`attitude_rad`; returns its metrics.
+fn trots_whole_run(path: &str, v_mps: f64, tol_mps: f64, attitude_rad: f64) -> MetricsSummary {
+    let mut w = world(path);
     w.sim.run(w.steps);
     let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
     assert!(!m.fell, "fell at {:?}", m.fell_at_s);
     assert!(
-        (m.mean_forward_speed_mps - 0.5).abs() <= 0.05,
+        (m.mean_forward_speed_mps - v_mps).abs() <= tol_mps,
         "mean speed {}",
         m.mean_forward_speed_mps
     );
-    assert_attitude_within(&m, 0.1);
+    assert_attitude_within(&m, attitude_rad);
+    m
+}
+
+#[test]
+fn quad16_trots_at_half_a_metre_per_second() {
+    let m = trots_whole_run("scenarios/trot.toml", 0.5, 0.05, 0.1);
     assert!(m.steps > 60, "{} touchdowns in 10 s of trotting", m.steps);
 }
 
@@ -51,16 +59,7 @@ fn quad16_trots_at_half_a_metre_per_second() {
 /// (docs/walking.md); this checks the nominal start.
 #[test]
 fn quad16_trots_at_study_a_reported_mean_speed() {
-    let mut w = world("scenarios/trot_study_mean.toml");
-    w.sim.run(w.steps);
-    let m = w.sim.robot(w.robots[0].1).unwrap().run.metrics.summary();
-    assert!(!m.fell, "fell at {:?}", m.fell_at_s);
-    assert!(
-        (m.mean_forward_speed_mps - 1.2).abs() <= 0.12,
-        "mean speed {}",
-        m.mean_forward_speed_mps
-    );
-    assert_attitude_within(&m, 0.2);
+    trots_whole_run("scenarios/trot_study_mean.toml", 1.2, 0.12, 0.2);
 }
 
 /// Study A's experiment, `scenarios/trot_flat.toml`: commanded 1.5 m/s with

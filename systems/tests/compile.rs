@@ -55,6 +55,30 @@ fn link_entity(sim: &mut Simulation, name: &str) -> Entity {
     q.iter(&sim.world).find(|(_, l)| l.name == name).unwrap().0
 }
 
+/// The link entity `name` of the robot `root`.
+fn robot_link(sim: &mut Simulation, root: Entity, name: &str) -> Entity {
+    let mut q = sim
+        .world
+        .query::<(Entity, &Link, &quadsim_components::BelongsTo)>();
+    q.iter(&sim.world)
+        .find(|(_, l, b)| l.name == name && b.0 == root)
+        .unwrap()
+        .0
+}
+
+/// The joint entity `name` of the robot `root`.
+fn robot_joint(sim: &mut Simulation, root: Entity, name: &str) -> Entity {
+    let mut q = sim.world.query::<(
+        Entity,
+        &quadsim_components::Joint,
+        &quadsim_components::BelongsTo,
+    )>();
+    q.iter(&sim.world)
+        .find(|(_, j, b)| j.name == name && b.0 == root)
+        .unwrap()
+        .0
+}
+
 /// Vertical force (base frame, N) that holds a floating robot still at the neutral pose: M·|g|.
 fn holding_force_n(model: &Model) -> f64 {
     let mut data = Data::new(model);
@@ -248,15 +272,7 @@ fn robots_of_one_articulation_share_one_model() {
         );
     }
     // Editing one robot's torso mass gives it its own model; the others keep theirs.
-    let torso = {
-        let mut q = sim
-            .world
-            .query::<(Entity, &Link, &quadsim_components::BelongsTo)>();
-        q.iter(&sim.world)
-            .find(|(_, l, b)| l.name == "torso" && b.0 == roots[1])
-            .unwrap()
-            .0
-    };
+    let torso = robot_link(&mut sim, roots[1], "torso");
     let mass_kg = sim.world.get::<Mass>(torso).unwrap().0;
     sim.world.entity_mut(torso).insert(Mass(mass_kg + 1.0));
     sim.compile();
@@ -280,7 +296,7 @@ fn robots_of_one_articulation_share_one_model() {
 /// shape's despawn each recompile their own robot, and only it.
 #[test]
 fn joint_and_shape_edits_recompile_only_their_robot() {
-    use quadsim_components::{BelongsTo, Collider, ColliderOf, Joint, JointDamping};
+    use quadsim_components::{Collider, ColliderOf, JointDamping};
     use quadsim_engine::description::Geometry;
 
     let mut sim = Simulation::new(SimConfig::default(), 1).unwrap();
@@ -291,12 +307,7 @@ fn joint_and_shape_edits_recompile_only_their_robot() {
     assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &m0));
 
     // a joint edit on robot a
-    let mut joints = sim.world.query::<(Entity, &Joint, &BelongsTo)>();
-    let elbow_a = joints
-        .iter(&sim.world)
-        .find(|(_, j, o)| o.0 == a && j.name == "elbow")
-        .unwrap()
-        .0;
+    let elbow_a = robot_joint(&mut sim, a, "elbow");
     sim.world.entity_mut(elbow_a).insert(JointDamping(0.3));
     sim.step();
     let ma = sim.robot(a).unwrap().model.clone();
@@ -304,12 +315,7 @@ fn joint_and_shape_edits_recompile_only_their_robot() {
     assert!(Arc::ptr_eq(&sim.robot(b).unwrap().model, &m0));
 
     // robot b's base box doubled: its derived inertia grows
-    let mut links = sim.world.query::<(Entity, &Link, &BelongsTo)>();
-    let base_b = links
-        .iter(&sim.world)
-        .find(|(_, l, o)| o.0 == b && l.name == "base")
-        .unwrap()
-        .0;
+    let base_b = robot_link(&mut sim, b, "base");
     let mut colliders = sim.world.query::<(Entity, &ColliderOf)>();
     let collider_b = colliders
         .iter(&sim.world)
