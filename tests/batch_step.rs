@@ -8,7 +8,7 @@ use std::path::Path;
 
 use quadsim::scenario::parse_scenario;
 use quadsim::world::{Overrides, World, build_world};
-use quadsim_components::{LaneBatching, RobotBatch};
+use quadsim_components::{LaneBatching, RobotBatch, StageLayout};
 
 /// Three herds of five, one per feature the lanes must keep: each fills one
 /// batch of four and leaves one robot to the scalar step.
@@ -134,4 +134,49 @@ fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
         let speed: f64 = r.state.v[6..].iter().map(|v| v.abs()).sum();
         assert!(speed > 1e-3, "{name} at rest: joint speeds sum {speed}");
     }
+}
+
+/// Every robot's metrics so far (energy, distance, margins, ...), as text
+/// with every float's bits.
+fn metrics(w: &World) -> Vec<(String, String)> {
+    w.robots
+        .iter()
+        .map(|(name, root)| {
+            let r = w.sim.robot(*root).unwrap();
+            (name.clone(), format!("{:?}", r.run.metrics.summary()))
+        })
+        .collect()
+}
+
+#[test]
+fn herd_stepped_block_by_block_equals_herd_stepped_stage_by_stage_bit_for_bit() {
+    // blocks of 4 (the lane groups) and 8 on two threads against the
+    // stage-major systems on one; the herds have noisy sensors and the
+    // estimator on (the defaults), so the Sense stage is in the comparison
+    let mut stages = world(1, true);
+    stages.sim.world.insert_resource(StageLayout::StageMajor);
+    let mut blocks: Vec<World> = [4, 8]
+        .map(|robots| {
+            let mut w = world(2, true);
+            w.sim
+                .world
+                .insert_resource(StageLayout::RobotBlocks { robots });
+            w
+        })
+        .into();
+    for step in 0..600 {
+        stages.sim.step();
+        for b in &mut blocks {
+            b.sim.step();
+        }
+        if step % 100 == 99 {
+            for b in &blocks {
+                assert_eq!(fingerprint(b), fingerprint(&stages), "step {step}");
+                assert_eq!(metrics(b), metrics(&stages), "step {step}");
+            }
+        }
+    }
+    // the Sense stage did work: the robots read their sensors
+    let batch = stages.sim.world.resource::<RobotBatch>();
+    assert!(batch.sims.iter().all(|s| s.sensing.is_some()));
 }

@@ -75,8 +75,8 @@ pub use link::{
 };
 pub use payload::{PayloadAction, PayloadEvent, PayloadEvents};
 pub use resources::{
-    ControlView, LaneBatching, PARALLEL_MIN_ITEMS, PoseSync, RobotBatch, RobotSim, SimClock,
-    SimConfig, SimThreadPool, ThreadPoolError,
+    ControlView, DEFAULT_BLOCK_ROBOTS, LaneBatching, PARALLEL_MIN_ITEMS, PoseSync, RobotBatch,
+    RobotSim, SimClock, SimConfig, SimThreadPool, StageLayout, ThreadPoolError,
 };
 pub use robot::{
     BelongsTo, CompileFailure, Robot, RobotBase, RobotIndex, RobotModelName, RobotParts,

@@ -26,17 +26,27 @@ pub fn run_controllers(
     rate: Res<ControlRate>,
     config: Res<SimConfig>,
 ) {
-    let tick = clock.step.is_multiple_of(rate.every_steps.max(1));
+    let tick = is_control_tick(clock.step, &rate);
     let sims = &mut batch.sims;
     let dt = clock_dt(&rate, &config);
     let t = clock.time_s;
-    pool.for_each(sims, |sim| {
-        if matches!(sim.run.controller, Controller::Prescribed(_)) {
-            prescribe(sim, t, tick);
-        } else if tick {
-            control_robot_at(sim, t, dt);
-        }
-    });
+    pool.for_each(sims, |sim| control_stage(sim, t, tick, dt));
+}
+
+/// One robot's `Control` stage at time `t_s`: the prescribed controller
+/// every step, the others on controller ticks (`tick`), each ticking every
+/// `control_dt_s`.
+pub fn control_stage(sim: &mut RobotSim, t_s: f64, tick: bool, control_dt_s: f64) {
+    if matches!(sim.run.controller, Controller::Prescribed(_)) {
+        prescribe(sim, t_s, tick);
+    } else if tick {
+        control_robot_at(sim, t_s, control_dt_s);
+    }
+}
+
+/// Whether step `step` is a controller tick.
+pub(crate) fn is_control_tick(step: u64, rate: &ControlRate) -> bool {
+    step.is_multiple_of(rate.every_steps.max(1))
 }
 
 /// The `prescribed` controller at time `t_s` (every step). Hybrid mode: the
@@ -95,7 +105,7 @@ fn read_state<'a>(
     }
 }
 
-fn clock_dt(rate: &ControlRate, config: &SimConfig) -> f64 {
+pub(crate) fn clock_dt(rate: &ControlRate, config: &SimConfig) -> f64 {
     rate.every_steps.max(1) as f64 * config.dt_s
 }
 

@@ -9,6 +9,7 @@
 //!    Dynamics → Integrate → Publish`, with robots integrated in parallel on
 //!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool).
 
+mod blocks;
 mod compile;
 mod contact;
 mod control;
@@ -22,12 +23,13 @@ mod sense;
 mod simulation;
 mod step;
 
+pub use blocks::{plan_blocks, robot_blocks, stage_major, step_robot_blocks};
 pub use compile::{
     CompileSchedule, DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule,
     compile_dirty_robots, mark_dirty_robots,
 };
 pub use contact::{height_above_ground, observe_robot, update_contacts};
-pub use control::{control_robot, control_robot_at, run_controllers};
+pub use control::{control_robot, control_robot_at, control_stage, run_controllers};
 pub use ground::compile_ground;
 pub use log::{
     FootLog, LogChannel, LogRecord, LogSink, Logger, MonitorChannel, PARALLEL_SAMPLING_MIN_ROBOTS,

@@ -3,6 +3,7 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
+use crate::blocks::{robot_blocks, stage_major, step_robot_blocks};
 use crate::contact::update_contacts;
 use crate::control::run_controllers;
 use crate::log::{LogChannel, MonitorChannel, log_due, log_step};
@@ -115,7 +116,7 @@ pub fn build_step_schedule() -> Schedule {
 
 /// Registers [`sense_robots`]: sensors, estimator, sensed state.
 pub fn register_sense(schedule: &mut Schedule) {
-    schedule.add_systems(sense_robots.in_set(SimSystems::Sense));
+    schedule.add_systems(sense_robots.run_if(stage_major).in_set(SimSystems::Sense));
 }
 
 /// Registers the gait systems (none yet: the gait planner comes in a later issue).
@@ -123,13 +124,21 @@ pub fn register_gait(_schedule: &mut Schedule) {}
 
 /// Registers [`run_controllers`] (joint PD; VMC comes with the walking issue).
 pub fn register_control(schedule: &mut Schedule) {
-    schedule.add_systems(run_controllers.in_set(SimSystems::Control));
+    schedule.add_systems(
+        run_controllers
+            .run_if(stage_major)
+            .in_set(SimSystems::Control),
+    );
 }
 
 /// Registers [`update_contacts`]: contact states (anchors) and observations,
 /// once per step at the step's start state.
 pub fn register_contact(schedule: &mut Schedule) {
-    schedule.add_systems(update_contacts.in_set(SimSystems::Contact));
+    schedule.add_systems(
+        update_contacts
+            .run_if(stage_major)
+            .in_set(SimSystems::Contact),
+    );
 }
 
 /// Registers the dynamics systems (none: see [`SimSystems::Dynamics`]).
@@ -138,7 +147,11 @@ pub fn register_dynamics(_schedule: &mut Schedule) {}
 /// Registers [`step_robots`] then [`advance_clock`].
 pub fn register_integrate(schedule: &mut Schedule) {
     schedule.add_systems(
-        (step_robots, advance_clock)
+        (
+            step_robot_blocks.run_if(robot_blocks),
+            step_robots.run_if(stage_major),
+            advance_clock,
+        )
             .chain()
             .in_set(SimSystems::Integrate),
     );
@@ -147,7 +160,11 @@ pub fn register_integrate(schedule: &mut Schedule) {
 /// Registers [`record_metrics`], [`sync_link_poses`] (gated by [`pose_sync_due`])
 /// and [`log_step`] (while a [`Logger`](crate::Logger) exists, on the steps it samples or snapshots).
 pub fn register_publish(schedule: &mut Schedule) {
-    schedule.add_systems(record_metrics.in_set(SimSystems::Publish));
+    schedule.add_systems(
+        record_metrics
+            .run_if(stage_major)
+            .in_set(SimSystems::Publish),
+    );
     schedule.add_systems(
         sync_link_poses
             .run_if(pose_sync_due)

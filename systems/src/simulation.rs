@@ -65,6 +65,7 @@ impl Simulation {
         add_edit_observers(&mut world);
         world.init_resource::<SharedModels>();
         world.init_resource::<quadsim_components::LaneBatching>();
+        world.init_resource::<quadsim_components::StageLayout>();
         world.init_resource::<Ground>();
         world.init_resource::<DefaultGroundPlane>();
         world.init_resource::<ControlRate>();

@@ -30,18 +30,27 @@ pub fn step_robots(
     mut ends: Local<Vec<usize>>,
 ) {
     let (dt_s, integrator) = (config.dt_s, config.integrator);
-    let lanes = integrator == Integrator::SemiImplicitEuler && batching.is_none_or(|b| b.0);
+    let lanes = lanes_on(&config, batching.as_deref());
     let sims = &mut batch.sims;
     plan_groups(sims, lanes, &mut ends);
-    pool.for_each_group(sims, &ends, |group| {
-        if group.len() > 1 {
-            step_in_lanes(group, dt_s);
-        } else {
-            for sim in group {
-                step_robot(sim, dt_s, integrator);
-            }
+    pool.for_each_group(sims, &ends, |group| step_group(group, dt_s, integrator));
+}
+
+/// Whether robots go into SIMD lanes: with semi-implicit Euler, unless
+/// [`LaneBatching`] is off.
+pub(crate) fn lanes_on(config: &SimConfig, batching: Option<&LaneBatching>) -> bool {
+    config.integrator == Integrator::SemiImplicitEuler && batching.is_none_or(|b| b.0)
+}
+
+/// Steps one group of [`plan_groups`]: in lanes when it has several robots.
+pub(crate) fn step_group(group: &mut [RobotSim], dt_s: f64, integrator: Integrator) {
+    if group.len() > 1 {
+        step_in_lanes(group, dt_s);
+    } else {
+        for sim in group {
+            step_robot(sim, dt_s, integrator);
         }
-    });
+    }
 }
 
 /// Whether a robot can be stepped in SIMD lanes (with semi-implicit Euler):
@@ -56,20 +65,37 @@ fn lane_ready(sim: &RobotSim) -> bool {
 pub fn plan_groups(sims: &[RobotSim], lanes: bool, ends: &mut Vec<usize>) {
     ends.clear();
     let mut start = 0;
-    for (i, sim) in sims.iter().enumerate().skip(1) {
-        let first = &sims[start];
-        let joins = lanes
-            && i - start < LANES
-            && lane_ready(first)
-            && lane_ready(sim)
-            && Arc::ptr_eq(&first.model, &sim.model);
-        if !joins {
-            ends.push(i);
-            start = i;
-        }
+    while start < sims.len() {
+        start += group_len(&sims[start..], lanes);
+        ends.push(start);
     }
-    if !sims.is_empty() {
-        ends.push(sims.len());
+}
+
+/// Length of the group [`plan_groups`] starts at `sims[0]` (`sims` not empty).
+fn group_len(sims: &[RobotSim], lanes: bool) -> usize {
+    let first = &sims[0];
+    let joins = |sim: &RobotSim| {
+        lanes && lane_ready(first) && lane_ready(sim) && Arc::ptr_eq(&first.model, &sim.model)
+    };
+    1 + sims[1..sims.len().min(LANES)]
+        .iter()
+        .take_while(|s| joins(s))
+        .count()
+}
+
+/// `f` on each group [`plan_groups`] would make of `sims`, in order,
+/// without a list of groups (nothing allocated).
+pub(crate) fn for_each_lane_group(
+    sims: &mut [RobotSim],
+    lanes: bool,
+    mut f: impl FnMut(&mut [RobotSim]),
+) {
+    let mut rest = sims;
+    while !rest.is_empty() {
+        let n = group_len(rest, lanes);
+        let (group, tail) = rest.split_at_mut(n);
+        f(group);
+        rest = tail;
     }
 }
 

@@ -1,0 +1,123 @@
+//! The robot pass: a step's per-robot stages run block by block
+//! ([`StageLayout::RobotBlocks`], the default).
+//!
+//! Stage by stage, each of the five per-robot stages walks the whole herd,
+//! so a herd larger than a core's cache is fetched from memory five times a
+//! step, and the thread pool is woken five times. Robots do not interact,
+//! so nothing requires a stage to finish for every robot before the next
+//! starts: here each worker takes a block of a few consecutive robots through
+//! all of them, in the schedule's order, while the block is in its cache.
+//! Each robot meets exactly the calls, inputs and order of the stage-major
+//! systems, so both layouts give the same bits
+//! (`tests/batch_step.rs`).
+
+use bevy_ecs::prelude::*;
+use quadsim_components::{
+    ControlRate, LaneBatching, RobotBatch, SimClock, SimConfig, SimThreadPool, StageLayout,
+};
+
+use crate::contact::observe_robot;
+use crate::control::{clock_dt, control_stage, is_control_tick};
+use crate::metrics::record_robot;
+use crate::sense::sense_robot;
+use crate::step::{for_each_lane_group, lanes_on, plan_groups, step_group};
+
+/// Whether the stage-major systems run (`sense_robots`, `run_controllers`,
+/// `update_contacts`, `step_robots`, `record_metrics`).
+pub fn stage_major(layout: Option<Res<StageLayout>>) -> bool {
+    matches!(layout.as_deref(), Some(StageLayout::StageMajor))
+}
+
+/// Whether [`step_robot_blocks`] runs instead (the default).
+pub fn robot_blocks(layout: Option<Res<StageLayout>>) -> bool {
+    !stage_major(layout)
+}
+
+/// Runs every robot's stages of this step, block by block on the world's
+/// thread pool: for each block, in this order, `Sense`
+/// ([`sense_robot`]), `Control` ([`control_stage`]), `Contact`
+/// ([`observe_robot`]), `Integrate` (each lane group stepped, as in
+/// [`step_robots`](crate::step_robots)) and the `Publish` stage's metrics
+/// ([`record_robot`]). Runs in the `Integrate` set, before the clock
+/// advances; world-level systems in the earlier sets run before it.
+#[allow(clippy::too_many_arguments)] // a system's parameters are its data access
+pub fn step_robot_blocks(
+    mut batch: ResMut<RobotBatch>,
+    pool: Res<SimThreadPool>,
+    clock: Res<SimClock>,
+    rate: Res<ControlRate>,
+    config: Res<SimConfig>,
+    batching: Option<Res<LaneBatching>>,
+    layout: Res<StageLayout>,
+    mut groups: Local<Vec<usize>>,
+    mut blocks: Local<Vec<usize>>,
+) {
+    let StageLayout::RobotBlocks { robots } = *layout else {
+        return;
+    };
+    let t_s = clock.time_s;
+    let tick = is_control_tick(clock.step, &rate);
+    let control_dt_s = clock_dt(&rate, &config);
+    let (dt_s, integrator) = (config.dt_s, config.integrator);
+    let saturate = config.passive.saturation;
+    let lanes = lanes_on(&config, batching.as_deref());
+    let sims = &mut batch.sims;
+    plan_groups(sims, lanes, &mut groups);
+    plan_blocks(&groups, robots, &mut blocks);
+    pool.for_each_group(sims, &blocks, |block| {
+        for sim in block.iter_mut() {
+            sense_robot(sim, t_s);
+        }
+        for sim in block.iter_mut() {
+            control_stage(sim, t_s, tick, control_dt_s);
+        }
+        for sim in block.iter_mut() {
+            observe_robot(sim, t_s);
+        }
+        for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
+        for sim in block.iter_mut() {
+            record_robot(sim, dt_s, saturate);
+        }
+    });
+}
+
+/// Merges consecutive lane groups (exclusive `group_ends`) into blocks of at
+/// most `max_robots` robots (a group larger than that is a block of its
+/// own), written as exclusive `block_ends`. Blocks start and end on group
+/// boundaries, so a block's groups are the herd's.
+pub fn plan_blocks(group_ends: &[usize], max_robots: usize, block_ends: &mut Vec<usize>) {
+    block_ends.clear();
+    let (mut start, mut last) = (0, 0);
+    for &end in group_ends {
+        if end - start > max_robots && last > start {
+            block_ends.push(last);
+            start = last;
+        }
+        last = end;
+    }
+    if last > start {
+        block_ends.push(last);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::plan_blocks;
+
+    fn blocks(groups: &[usize], max: usize) -> Vec<usize> {
+        let mut b = Vec::new();
+        plan_blocks(groups, max, &mut b);
+        b
+    }
+
+    #[test]
+    fn blocks_gather_whole_groups_up_to_the_size() {
+        assert_eq!(blocks(&[4, 8, 12, 13], 8), [8, 13]);
+        assert_eq!(blocks(&[4, 8, 12, 13], 4), [4, 8, 12, 13]);
+        assert_eq!(blocks(&[4, 8, 12, 13], 100), [13]);
+        // a group larger than a block is a block of its own
+        assert_eq!(blocks(&[4, 5, 9], 2), [4, 5, 9]);
+        assert_eq!(blocks(&[1, 2, 3, 4, 5], 2), [2, 4, 5]);
+        assert!(blocks(&[], 8).is_empty());
+    }
+}
