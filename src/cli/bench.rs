@@ -44,6 +44,12 @@ pub struct BenchArgs {
     /// SIMD lanes (the results are the same; for comparing the speed).
     #[arg(long)]
     pub no_lanes: bool,
+    /// Robots per block of the step's robot pass (each block goes through
+    /// sense, control, contact, integration and metrics while in cache);
+    /// 0 runs each stage over every robot in turn instead (the results are
+    /// the same; for comparing the speed).
+    #[arg(long, default_value_t = quadsim_components::DEFAULT_BLOCK_ROBOTS)]
+    pub block_robots: usize,
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -124,6 +130,10 @@ pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoin
     w.sim
         .world
         .insert_resource(quadsim_components::LaneBatching(!a.no_lanes));
+    w.sim.world.insert_resource(match a.block_robots {
+        0 => quadsim_components::StageLayout::StageMajor,
+        n => quadsim_components::StageLayout::RobotBlocks { robots: n },
+    });
     w.sim.run(a.warmup.max(1));
     let with = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
     let bytes_per_robot = match (with, base) {

@@ -5,9 +5,10 @@
 //!
 //! 1. [`CompileSchedule`]: robots whose description components changed are
 //!    recompiled (never inside a step);
-//! 2. [`StepSchedule`]: the [`SimSystems`] stages `Gait → Control → Contact →
-//!    Dynamics → Integrate → Publish`, with robots integrated in parallel on
-//!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool).
+//! 2. [`StepSchedule`]: the [`SimSystems`] stages `Sense → Gait → Control → Contact →
+//!    Dynamics → Integrate → Publish`, with robots stepped in parallel on
+//!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool), block
+//!    by block through all their stages by default ([`step_robot_blocks`]).
 
 mod blocks;
 mod compile;

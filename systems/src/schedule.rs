@@ -43,9 +43,22 @@ pub struct StepSchedule;
 ///    parallel on the [`SimThreadPool`](quadsim_components::SimThreadPool), then
 ///    the [`SimClock`](quadsim_components::SimClock).
 /// 6. [`Publish`](SimSystems::Publish): responsible for publishing and logging:
-///    copying link poses back to [`LinkPose`](quadsim_components::LinkPose)
-///    at the [`PoseSync`](quadsim_components::PoseSync) rate, and (later)
-///    streaming and logging.
+///    each step's metrics, copying link poses back to
+///    [`LinkPose`](quadsim_components::LinkPose) at the
+///    [`PoseSync`](quadsim_components::PoseSync) rate, streaming and logging.
+///
+/// The per-robot work of these stages (sense, control, contact, integrate,
+/// metrics) is laid over the robots by the
+/// [`StageLayout`](quadsim_components::StageLayout) resource. By default
+/// ([`RobotBlocks`](quadsim_components::StageLayout::RobotBlocks)) one system,
+/// [`step_robot_blocks`], at the start of `Integrate`, takes each block of a
+/// few robots through all of them in the order above while the block is in
+/// the core's cache; the stage-major systems ([`sense_robots`],
+/// [`run_controllers`], [`update_contacts`], [`step_robots`],
+/// [`record_metrics`]) run instead under
+/// [`StageMajor`](quadsim_components::StageLayout::StageMajor). Robots do not
+/// interact, so both give the same bits; world-level systems added to the
+/// sets before `Integrate` run before the robot pass in either layout.
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SimSystems {
     /// Sensors and state estimation.
