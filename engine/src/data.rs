@@ -5,7 +5,7 @@
 //! world-fixed point [`Data::origin`] that coincides with the base origin when
 //! [`crate::kinematics::forward_kinematics`] last ran.
 
-use crate::leg_lanes::{GroupAba, GroupKin};
+use crate::leg_lanes::GroupKin;
 use crate::model::Model;
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
@@ -47,12 +47,11 @@ pub struct Data {
     pub u_tau: Vec<f64>,
     /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (nbodies).
     pub c: Vec<Motion>,
-    /// ABA's workspace of the legs' groups when the model has them
-    /// ([`Model::leg_lanes`]); `ia`, `pa`, `u`, `d_inv`, `u_tau` and `c`
-    /// are then not written by ABA.
-    pub(crate) leg_aba: Vec<GroupAba>,
-    /// Forward kinematics of the legs' groups in lanes, beside `s`,
-    /// `inertia_ref` and `vel` (which hold the same numbers per body).
+    /// Forward kinematics of the legs' groups in lanes when the model has
+    /// them ([`Model::leg_lanes`]), beside `s`, `inertia_ref` and `vel`
+    /// (which hold the same numbers per body), for ABA in lanes; ABA then
+    /// keeps its workspace on the stack and does not write `ia`, `pa`, `u`,
+    /// `d_inv`, `u_tau` and `c`. Empty in a kinematics-only `Data`.
     pub(crate) leg_kin: Vec<GroupKin>,
 
     // --- outputs ---
@@ -128,9 +127,8 @@ impl Data {
             d_inv: dyn_vec(dynamics, 0.0, nb),
             u_tau: dyn_vec(dynamics, 0.0, nb),
             c: dyn_vec(dynamics, Motion::ZERO, nb),
-            leg_aba: dyn_vec(dynamics, GroupAba::default(), leg_groups),
-            // forward kinematics with the legs in lanes writes these
-            leg_kin: vec![GroupKin::default(); leg_groups],
+            // forward kinematics with the legs in lanes writes these for ABA
+            leg_kin: dyn_vec(dynamics, GroupKin::default(), leg_groups),
             ddq: dyn_vec(dynamics, 0.0, nv),
             tau: dyn_vec(dynamics, 0.0, nv),
             mass_matrix: dyn_vec(dynamics, 0.0, nv * nv),

@@ -1,11 +1,11 @@
 //! The lane passes of [`super`]: forward kinematics and ABA with one AVX lane
 //! per leg. Each statement mirrors the general path's (named in comments).
 
-use super::LEGS;
 use super::LegLanes;
 use super::x4::{
     F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis,
 };
+use super::{LEGS, MAX_GROUPS};
 use crate::data::Data;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion, RigidInertia, Sym6};
@@ -72,9 +72,10 @@ pub(crate) struct GroupKin {
     vel: Motion4,
 }
 
-/// What ABA's last pass needs of one group, kept from the inward pass.
+/// What ABA's last pass needs of one group, kept from the inward pass (on
+/// the stack of one ABA call).
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupAba {
+struct GroupAba {
     /// `U = Iᴬ S`.
     u: Force4,
     /// `1 / D`.
@@ -100,9 +101,10 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let origin = V3::splat(data.origin);
     let mut xp = Transform4::new(M3::splat(base.rot), V3::splat(base.trans));
     let mut vp = Motion4::splat(data.vel[0]);
-    let ng = plan.groups.len();
-    let kin = &mut data.leg_kin[..ng];
-    for ((grp, st), gk) in plan.groups.iter().zip(&plan.steps).zip(kin.iter_mut()) {
+    // A kinematics-only `Data` keeps no lane copies (only ABA reads them).
+    let mut kin = data.leg_kin.iter_mut();
+    for (grp, st) in plan.groups.iter().zip(&plan.steps) {
+        let mut gk = kin.next();
         // The joint frame: parent pose ∘ placement, with the same skips.
         let rot_j = if st.rotates {
             xp.rot.mul_mat3(st.placement.rot)
@@ -124,8 +126,10 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         let r = x.trans.sub(origin);
         let s = Motion4::new(r.cross(aw), aw);
         let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
-        gk.s = s;
-        gk.inertia = inertia;
+        if let Some(gk) = gk.as_mut() {
+            gk.s = s;
+            gk.inertia = inertia;
+        }
         let (xs, ss) = (x.lanes(), s.lanes());
         let (mass, com, ic) = (
             inertia.mass.to_array(),
@@ -140,7 +144,9 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         }
         if let Some(v) = v {
             let vel = vp.add(s.scale(gather(v, &st.idx_v)));
-            gk.vel = vel;
+            if let Some(gk) = gk.as_mut() {
+                gk.vel = vel;
+            }
             let vs = vel.lanes();
             for k in 0..LEGS {
                 data.vel[grp[k]] = vs[k];
@@ -152,10 +158,10 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
 }
 
 /// Copies the legs' per-body velocities into `data.leg_kin` (after
-/// forward kinematics' velocity-only update, which writes the per-body ones).
+/// forward kinematics' velocity-only update, which writes the per-body ones);
+/// nothing for a kinematics-only `Data`, which has no lane copies.
 pub(crate) fn refresh_velocities(plan: &LegLanes, data: &mut Data) {
-    let ng = plan.groups.len();
-    for (grp, gk) in plan.groups.iter().zip(&mut data.leg_kin[..ng]) {
+    for (grp, gk) in plan.groups.iter().zip(data.leg_kin.iter_mut()) {
         gk.vel = Motion4::from_lanes(grp.map(|i| data.vel[i]));
     }
 }
@@ -194,7 +200,9 @@ pub(crate) fn aba_passes_legs(
     let (v, tau) = (&v[..nv], &tau[..nv]);
     let f_ext = &data.f_ext[..n];
     let kin = &data.leg_kin[..ng];
-    let work = &mut data.leg_aba[..ng];
+    // ABA's per-group workspace, from pass 2 to pass 3 of this call only.
+    let mut work_all = [GroupAba::default(); MAX_GROUPS];
+    let work = &mut work_all[..ng];
     // Pass 1 of the base; its children's terms are added below.
     let (mut ia0, mut pa0) = base_pass1(
         &data.inertia_ref[0],

@@ -24,14 +24,17 @@ mod avx;
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{
-    GroupAba, GroupKin, GroupStep, aba_passes_legs, poses_legs, refresh_velocities,
-};
+pub(crate) use avx::{GroupKin, GroupStep, aba_passes_legs, poses_legs, refresh_velocities};
 
 use crate::model::{JointType, Model};
 
 /// Legs per group: four f64 lanes fill one AVX register.
 pub const LEGS: usize = 4;
+
+/// Most groups (joints per leg) in lanes: ABA keeps its per-group workspace
+/// in an array of this length on the stack, not in [`crate::Data`]. Longer
+/// legs take the general path (the same bits).
+pub const MAX_GROUPS: usize = 6;
 
 /// The legs' bodies grouped by depth, decided once per model when the model
 /// is compiled, with what forward kinematics needs of each group in lanes.
@@ -58,6 +61,7 @@ impl LegLanes {
             || crate::kinematics::DIAGONAL_INERTIA_SHORTCUT
             || n < 1 + LEGS
             || !(n - 1).is_multiple_of(LEGS)
+            || (n - 1) / LEGS > MAX_GROUPS
             || m.depth_order.len() != n - 1
             || m.pose_step.len() != n
         {
@@ -94,15 +98,10 @@ impl LegLanes {
     }
 }
 
-/// Placeholders of the lane workspaces in [`crate::Data`] where there are no lanes.
+/// Placeholder of the lane copies in [`crate::Data`] where there are no lanes.
 #[cfg(not(target_arch = "x86_64"))]
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct GroupKin;
-
-/// Placeholders of the lane workspaces in [`crate::Data`] where there are no lanes.
-#[cfg(not(target_arch = "x86_64"))]
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupAba;
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
@@ -223,5 +222,42 @@ mod tests {
             outs.push(d.ddq.clone());
         }
         assert_eq!(bits(&outs[0]), bits(&outs[1]));
+    }
+
+    /// A kinematics-only `Data` (no lane copies kept for ABA) gets the same
+    /// poses, subspaces, velocities and reference inertias as a full one, on
+    /// the full and the velocity-only path.
+    #[test]
+    fn kinematics_only_data_gets_the_same_kinematics() {
+        let desc = crate::robots::builtin("quad16").unwrap();
+        let m = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        assert!(m.leg_lanes.is_some());
+        let mut q = m.neutral_q();
+        for (k, x) in q[m.base_nq()..].iter_mut().enumerate() {
+            *x = 0.2 * k as f64 - 1.3;
+        }
+        let v0: Vec<f64> = (0..m.nv).map(|k| 0.05 * k as f64 - 0.4).collect();
+        let v1 = vec![0.7; m.nv];
+        let kin = |d: &Data| {
+            let mut all = Vec::new();
+            for i in 0..m.nbodies {
+                all.extend(d.pose[i].rot.to_cols_array());
+                all.extend(d.pose[i].trans.to_array());
+                all.extend(d.vel[i].to_array());
+                all.extend(d.s[i].to_array());
+                let ri = d.inertia_ref[i];
+                all.push(ri.mass);
+                all.extend(ri.com.to_array());
+                all.extend(ri.inertia_com.to_cols_array());
+            }
+            bits(&all)
+        };
+        let (mut full, mut light) = (Data::new(&m), Data::for_kinematics(&m));
+        assert!(light.leg_kin.is_empty() && !full.leg_kin.is_empty());
+        for v in [&v0, &v1] {
+            forward_kinematics(&m, &mut full, &q, v);
+            forward_kinematics(&m, &mut light, &q, v);
+            assert_eq!(kin(&full), kin(&light));
+        }
     }
 }
