@@ -2,7 +2,7 @@
 //! (Featherstone 2008, §6.2, Table 6.2, in the fixed frame, where composite
 //! inertias add without transforms).
 
-use crate::data::Data;
+use crate::data::{BodyScratch, Data};
 use crate::kinematics::forward_kinematics_pos;
 use crate::model::{JointType, Model, NO_PARENT};
 
@@ -17,17 +17,20 @@ pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> &'d [f64] {
 /// CRBA after [`forward_kinematics_pos`] on the same `q`.
 pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
     let nv = model.nv;
+    // composite inertias, in this thread's workspace
+    let mut w = BodyScratch::take(model.nbodies);
+    let ia = &mut w.ia;
     for i in 0..model.nbodies {
-        data.ia[i] = data.inertia_ref[i].to_sym6();
+        ia[i] = data.inertia_ref[i].to_sym6();
     }
     for i in (1..model.nbodies).rev() {
-        let ic = data.ia[i];
-        data.ia[model.parent[i]] += ic;
+        let ic = ia[i];
+        ia[model.parent[i]] += ic;
     }
     let mm = &mut data.mass_matrix;
     for i in (1..model.nbodies).rev() {
         let iv = model.idx_v[i];
-        let f = data.ia[i].mul_motion(data.s[i]);
+        let f = ia[i].mul_motion(data.s[i]);
         mm[iv * nv + iv] = data.s[i].dot(f) + model.armature[iv];
         let mut j = model.parent[i];
         while j != NO_PARENT {
@@ -52,7 +55,7 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
     }
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
-            let f = data.ia[0].mul_motion(data.s_base[k]);
+            let f = ia[0].mul_motion(data.s_base[k]);
             for l in k..6 {
                 let x = data.s_base[l].dot(f);
                 mm[l * nv + k] = x;
@@ -60,4 +63,5 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
             }
         }
     }
+    w.give_back();
 }

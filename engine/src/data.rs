@@ -35,23 +35,11 @@ pub struct Data {
     /// External spatial force on each body, world axes about `origin` (nbodies).
     /// Set by the caller (contacts, pushes) after kinematics; see [`Data::add_point_force`].
     pub f_ext: Vec<Force>,
-    /// Articulated (ABA) or composite (CRBA) inertia of each body, reference frame (nbodies).
-    pub ia: Vec<Sym6>,
-    /// Articulated bias force (ABA) (nbodies).
-    pub pa: Vec<Force>,
-    /// `U = Iᴬ S` for each 1-DOF body (ABA) (nbodies).
-    pub u: Vec<Force>,
-    /// `1 / D`, `D = Sᵀ U + armature` (ABA) (nbodies).
-    pub d_inv: Vec<f64>,
-    /// `u = τ − Sᵀ pᴬ` (ABA) (nbodies).
-    pub u_tau: Vec<f64>,
-    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (nbodies).
-    pub c: Vec<Motion>,
     /// Forward kinematics of the legs' groups in lanes when the model has
     /// them ([`Model::leg_lanes`]), beside `s`, `inertia_ref` and `vel`
-    /// (which hold the same numbers per body), for ABA in lanes; ABA then
-    /// keeps its workspace on the stack and does not write `ia`, `pa`, `u`,
-    /// `d_inv`, `u_tau` and `c`. Empty in a kinematics-only `Data`.
+    /// (which hold the same numbers per body), for ABA in lanes. Empty in a
+    /// kinematics-only `Data`. (ABA's and CRBA's per-body workspace, which
+    /// holds nothing between calls, is one per thread: [`BodyScratch`].)
     pub(crate) leg_kin: Vec<GroupKin>,
 
     // --- outputs ---
@@ -88,8 +76,11 @@ pub(crate) struct KinematicsKey {
 }
 
 impl Data {
-    /// Allocates the workspace for `model`.
+    /// Allocates the workspace for `model` (and sizes this thread's ABA and
+    /// CRBA workspace, [`BodyScratch`], for it, so that stepping on this
+    /// thread allocates nothing from the first step).
     pub fn new(model: &Model) -> Data {
+        BodyScratch::take(model.nbodies).give_back();
         Data::allocate(model, true)
     }
 
@@ -121,12 +112,6 @@ impl Data {
             acc: dyn_vec(dynamics, Motion::ZERO, nb),
             f: dyn_vec(dynamics, Force::ZERO, nb),
             f_ext: dyn_vec(dynamics, Force::ZERO, nb),
-            ia: dyn_vec(dynamics, Sym6::ZERO, nb),
-            pa: dyn_vec(dynamics, Force::ZERO, nb),
-            u: dyn_vec(dynamics, Force::ZERO, nb),
-            d_inv: dyn_vec(dynamics, 0.0, nb),
-            u_tau: dyn_vec(dynamics, 0.0, nb),
-            c: dyn_vec(dynamics, Motion::ZERO, nb),
             // forward kinematics with the legs in lanes writes these for ABA
             leg_kin: dyn_vec(dynamics, GroupKin::default(), leg_groups),
             ddq: dyn_vec(dynamics, 0.0, nv),
@@ -180,5 +165,53 @@ impl Data {
     pub fn body_point_velocity(&self, body: usize, point_in_body: DVec3) -> DVec3 {
         let p = self.pose[body].transform_point(point_in_body);
         self.vel[body].point_velocity(p - self.origin)
+    }
+}
+
+/// ABA's and CRBA's per-body workspace (reference frame, nbodies each): it
+/// holds nothing from one call to the next, so it is one per thread, not one
+/// per robot's [`Data`]. Sized to the largest model the thread has run
+/// (allocating on a thread's first call only).
+#[derive(Debug, Default)]
+pub(crate) struct BodyScratch {
+    /// Articulated (ABA) or composite (CRBA) inertia of each body.
+    pub(crate) ia: Vec<Sym6>,
+    /// Articulated bias force (ABA).
+    pub(crate) pa: Vec<Force>,
+    /// `U = Iᴬ S` for each 1-DOF body (ABA).
+    pub(crate) u: Vec<Force>,
+    /// `1 / D`, `D = Sᵀ U + armature` (ABA).
+    pub(crate) d_inv: Vec<f64>,
+    /// `u = τ − Sᵀ pᴬ` (ABA).
+    pub(crate) u_tau: Vec<f64>,
+    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (ABA).
+    pub(crate) c: Vec<Motion>,
+}
+
+thread_local! {
+    static BODY_SCRATCH: std::cell::RefCell<BodyScratch> =
+        std::cell::RefCell::new(BodyScratch::default());
+}
+
+impl BodyScratch {
+    /// This thread's workspace with at least `nbodies` entries per array,
+    /// lent until [`BodyScratch::give_back`]. Every algorithm writes an entry
+    /// before reading it: what it held before does not matter.
+    pub(crate) fn take(nbodies: usize) -> BodyScratch {
+        let mut s = BODY_SCRATCH.with(std::cell::RefCell::take);
+        if s.ia.len() < nbodies {
+            s.ia.resize(nbodies, Sym6::ZERO);
+            s.pa.resize(nbodies, Force::ZERO);
+            s.u.resize(nbodies, Force::ZERO);
+            s.d_inv.resize(nbodies, 0.0);
+            s.u_tau.resize(nbodies, 0.0);
+            s.c.resize(nbodies, Motion::ZERO);
+        }
+        s
+    }
+
+    /// Returns the workspace to this thread.
+    pub(crate) fn give_back(self) {
+        BODY_SCRATCH.with(|cell| drop(cell.replace(self)));
     }
 }

@@ -181,8 +181,8 @@ fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6
 
 /// ABA's three passes after forward kinematics, legs in lanes
 /// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
-/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) stays in `data.leg_aba` and
-/// locals instead.
+/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) is in a per-group array on the
+/// stack and locals instead.
 #[target_feature(enable = "avx")]
 pub(crate) fn aba_passes_legs(
     model: &Model,
