@@ -24,7 +24,8 @@ pub struct Data {
     pub s: Vec<Motion>,
     /// Motion subspace of the free base, reference frame: columns for `v[0..6]`.
     pub s_base: [Motion; 6],
-    /// Each body's rigid inertia in the reference frame (CoM relative to `origin`) (nbodies).
+    /// Each body's rigid inertia in the reference frame (CoM relative to `origin`)
+    /// (nbodies; empty in a kinematics-only `Data`).
     pub inertia_ref: Vec<RigidInertia>,
 
     // --- dynamics (rnea / aba / crba) ---
@@ -85,10 +86,11 @@ impl Data {
     }
 
     /// A workspace for [`crate::kinematics::forward_kinematics`] and the
-    /// point queries on its result only (poses, subspaces, velocities,
-    /// reference inertias): the dynamics arrays are left empty, so the
-    /// dynamics algorithms must not be run on it. For state estimators,
-    /// which need a second copy of a robot's kinematics and nothing else.
+    /// point queries on its result only (poses, subspaces, velocities): the
+    /// reference inertias and the dynamics arrays are left empty (and not
+    /// computed), so neither the dynamics algorithms nor the CoM and energy
+    /// functions must be run on it. For state estimators, which need a
+    /// second copy of a robot's kinematics and nothing else.
     pub fn for_kinematics(model: &Model) -> Data {
         Data::allocate(model, false)
     }
@@ -108,7 +110,7 @@ impl Data {
             vel: vec![Motion::ZERO; nb],
             s: vec![Motion::ZERO; nb],
             s_base: [Motion::ZERO; 6],
-            inertia_ref: vec![RigidInertia::ZERO; nb],
+            inertia_ref: dyn_vec(dynamics, RigidInertia::ZERO, nb),
             acc: dyn_vec(dynamics, Motion::ZERO, nb),
             f: dyn_vec(dynamics, Force::ZERO, nb),
             f_ext: dyn_vec(dynamics, Force::ZERO, nb),

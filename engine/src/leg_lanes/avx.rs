@@ -93,8 +93,8 @@ fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
 
 /// The legs' part of forward kinematics (`kinematics::poses`), after the
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
-/// poses, motion subspaces, inertias and velocities of every leg body, in
-/// the per-body arrays and in `data.leg_kin`.
+/// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
+/// velocities of every leg body, in the per-body arrays and in `data.leg_kin`.
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -103,6 +103,7 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let mut vp = Motion4::splat(data.vel[0]);
     // A kinematics-only `Data` keeps no lane copies (only ABA reads them).
     let mut kin = data.leg_kin.iter_mut();
+    let with_inertia = !data.inertia_ref.is_empty();
     for (grp, st) in plan.groups.iter().zip(&plan.steps) {
         let mut gk = kin.next();
         // The joint frame: parent pose ∘ placement, with the same skips.
@@ -125,22 +126,29 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         let aw = if st.sign > 0.0 { col } else { col.neg() };
         let r = x.trans.sub(origin);
         let s = Motion4::new(r.cross(aw), aw);
-        let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
-        if let Some(gk) = gk.as_mut() {
-            gk.s = s;
-            gk.inertia = inertia;
-        }
         let (xs, ss) = (x.lanes(), s.lanes());
-        let (mass, com, ic) = (
-            inertia.mass.to_array(),
-            inertia.com.lanes(),
-            inertia.inertia_com.lanes(),
-        );
         for k in 0..LEGS {
             let i = grp[k];
             data.pose[i] = xs[k];
             data.s[i] = ss[k];
-            data.inertia_ref[i] = RigidInertia::new(mass[k], com[k], ic[k]);
+        }
+        if let Some(gk) = gk.as_mut() {
+            gk.s = s;
+        }
+        // (a kinematics-only `Data` has no reference inertias)
+        if with_inertia {
+            let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
+            if let Some(gk) = gk.as_mut() {
+                gk.inertia = inertia;
+            }
+            let (mass, com, ic) = (
+                inertia.mass.to_array(),
+                inertia.com.lanes(),
+                inertia.inertia_com.lanes(),
+            );
+            for k in 0..LEGS {
+                data.inertia_ref[grp[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
+            }
         }
         if let Some(v) = v {
             let vel = vp.add(s.scale(gather(v, &st.idx_v)));
