@@ -48,8 +48,6 @@ pub struct Data {
     pub ddq: Vec<f64>,
     /// Generalised force from RNEA (nv).
     pub tau: Vec<f64>,
-    /// Joint-space mass matrix from CRBA, full symmetric, row-major (nv × nv).
-    pub mass_matrix: Vec<f64>,
     /// Nonlinear effects `C(q, v) v + g(q)` (nv).
     pub nle: Vec<f64>,
     /// Generalised gravity `g(q)` (nv).
@@ -78,10 +76,12 @@ pub(crate) struct KinematicsKey {
 
 impl Data {
     /// Allocates the workspace for `model` (and sizes this thread's ABA and
-    /// CRBA workspace, [`BodyScratch`], for it, so that stepping on this
-    /// thread allocates nothing from the first step).
+    /// CRBA workspace, [`BodyScratch`], and mass-matrix buffer,
+    /// [`crate::crba::MassMatrix`], for it, so that stepping on this thread
+    /// allocates nothing from the first step).
     pub fn new(model: &Model) -> Data {
         BodyScratch::take(model.nbodies).give_back();
+        crate::crba::MassMatrix::reserve(model);
         Data::allocate(model, true)
     }
 
@@ -118,7 +118,6 @@ impl Data {
             leg_kin: dyn_vec(dynamics, GroupKin::default(), leg_groups),
             ddq: dyn_vec(dynamics, 0.0, nv),
             tau: dyn_vec(dynamics, 0.0, nv),
-            mass_matrix: dyn_vec(dynamics, 0.0, nv * nv),
             nle: dyn_vec(dynamics, 0.0, nv),
             gravity: dyn_vec(dynamics, 0.0, nv),
             jacobian: dyn_vec(dynamics, 0.0, 3 * nv),

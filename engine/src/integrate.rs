@@ -481,7 +481,7 @@ fn acceleration<F: ForceModel>(
 /// outputs) and the known generalised forces `tau` (nv), solves the base
 /// rows of `M a + h = τ + Jᵀ f_ext` for the base acceleration and writes into
 /// the joint rows of `tau` the total joint force that realises `a` (see
-/// [`ImposedJoints`]). Fills `data.mass_matrix`; leaves `data.tau` with
+/// [`ImposedJoints`]). Computes the mass matrix; leaves `data.tau` with
 /// `RNEA(q, v, [0; a_j], f_ext)`.
 ///
 /// # Panics
@@ -498,8 +498,7 @@ pub fn hybrid_acceleration(
     a[..nv0].fill(0.0);
     rnea_from_kinematics(model, data, v, a, true);
     if nv0 == 6 {
-        crba_from_kinematics(model, data);
-        let mm = &data.mass_matrix;
+        let mm = crba_from_kinematics(model, data);
         let mut mbb = [[0.0; 6]; 6];
         let mut rhs = [0.0; 6];
         for k in 0..6 {
