@@ -5,12 +5,14 @@
 //! world-fixed point [`Data::origin`] that coincides with the base origin when
 //! [`crate::kinematics::forward_kinematics`] last ran.
 
-use crate::leg_lanes::GroupKin;
 use crate::model::Model;
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
 
 /// Workspace and outputs of the algorithms, grouped by the stage that writes them.
+/// What holds nothing from one call to the next (ABA's and CRBA's per-body
+/// workspace, the mass matrix, RK4's stages) is one per thread instead
+/// (`BodyScratch`, [`crate::crba::MassMatrix`]), not one per robot.
 #[derive(Clone, Debug)]
 pub struct Data {
     // --- kinematics (forward_kinematics) ---
@@ -36,12 +38,6 @@ pub struct Data {
     /// External spatial force on each body, world axes about `origin` (nbodies).
     /// Set by the caller (contacts, pushes) after kinematics; see [`Data::add_point_force`].
     pub f_ext: Vec<Force>,
-    /// Forward kinematics of the legs' groups in lanes when the model has
-    /// them ([`Model::leg_lanes`]), beside `s`, `inertia_ref` and `vel`
-    /// (which hold the same numbers per body), for ABA in lanes. Empty in a
-    /// kinematics-only `Data`. (ABA's and CRBA's per-body workspace, which
-    /// holds nothing between calls, is one per thread: [`BodyScratch`].)
-    pub(crate) leg_kin: Vec<GroupKin>,
 
     // --- outputs ---
     /// Generalised acceleration from ABA (nv).
@@ -76,7 +72,7 @@ pub(crate) struct KinematicsKey {
 
 impl Data {
     /// Allocates the workspace for `model` (and sizes this thread's ABA and
-    /// CRBA workspace, [`BodyScratch`], and mass-matrix buffer,
+    /// CRBA workspace, `BodyScratch`, and mass-matrix buffer,
     /// [`crate::crba::MassMatrix`], for it, so that stepping on this thread
     /// allocates nothing from the first step).
     pub fn new(model: &Model) -> Data {
@@ -99,7 +95,6 @@ impl Data {
     fn allocate(model: &Model, dynamics: bool) -> Data {
         let nb = model.nbodies;
         let nv = model.nv;
-        let leg_groups = model.leg_lanes.as_ref().map_or(0, |p| p.groups.len());
         // `n` elements of `x` with the dynamics, none without
         fn dyn_vec<T: Clone>(dynamics: bool, x: T, n: usize) -> Vec<T> {
             if dynamics { vec![x; n] } else { Vec::new() }
@@ -114,8 +109,6 @@ impl Data {
             acc: dyn_vec(dynamics, Motion::ZERO, nb),
             f: dyn_vec(dynamics, Force::ZERO, nb),
             f_ext: dyn_vec(dynamics, Force::ZERO, nb),
-            // forward kinematics with the legs in lanes writes these for ABA
-            leg_kin: dyn_vec(dynamics, GroupKin::default(), leg_groups),
             ddq: dyn_vec(dynamics, 0.0, nv),
             tau: dyn_vec(dynamics, 0.0, nv),
             nle: dyn_vec(dynamics, 0.0, nv),

@@ -210,10 +210,6 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
             for i in 1..model.nbodies {
                 data.vel[i] = data.vel[model.parent[i]] + data.s[i] * v[model.idx_v[i]];
             }
-            #[cfg(target_arch = "x86_64")]
-            if let Some(plan) = &model.leg_lanes {
-                crate::leg_lanes::refresh_velocities(plan, data);
-            }
         }
         _ => {
             poses(model, data, q, Some(v));

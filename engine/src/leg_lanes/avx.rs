@@ -60,22 +60,29 @@ impl GroupStep {
     }
 }
 
-/// One group's kinematics in lanes, beside the per-body copies in [`Data`]
-/// (ABA reads these instead of gathering from the per-body arrays).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupKin {
-    /// Motion subspace columns, reference frame.
-    s: Motion4,
-    /// Inertias in the reference frame.
-    inertia: Inertia4,
-    /// Spatial velocities, reference frame.
-    vel: Motion4,
+/// One group's motion subspaces, inertias and velocities (reference frame)
+/// in lanes, gathered from the per-body arrays that forward kinematics
+/// filled (kept nowhere else: ABA in lanes gathers them per call).
+#[inline(always)]
+fn group_kinematics(grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+    let ri = grp.map(|i| data.inertia_ref[i]);
+    (
+        Motion4::from_lanes(grp.map(|i| data.s[i])),
+        Inertia4 {
+            mass: F4::from_array(ri.map(|r| r.mass)),
+            com: V3::from_lanes(ri.map(|r| r.com)),
+            inertia_com: M3::from_lanes(ri.map(|r| r.inertia_com)),
+        },
+        Motion4::from_lanes(grp.map(|i| data.vel[i])),
+    )
 }
 
 /// What ABA's last pass needs of one group, kept from the inward pass (on
 /// the stack of one ABA call).
 #[derive(Clone, Copy, Debug, Default)]
 struct GroupAba {
+    /// Motion subspace columns, reference frame.
+    s: Motion4,
     /// `U = Iᴬ S`.
     u: Force4,
     /// `1 / D`.
@@ -94,18 +101,15 @@ fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
 /// The legs' part of forward kinematics (`kinematics::poses`), after the
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
-/// velocities of every leg body, in the per-body arrays and in `data.leg_kin`.
+/// velocities of every leg body, in the per-body arrays.
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
     let origin = V3::splat(data.origin);
     let mut xp = Transform4::new(M3::splat(base.rot), V3::splat(base.trans));
     let mut vp = Motion4::splat(data.vel[0]);
-    // A kinematics-only `Data` keeps no lane copies (only ABA reads them).
-    let mut kin = data.leg_kin.iter_mut();
     let with_inertia = !data.inertia_ref.is_empty();
     for (grp, st) in plan.groups.iter().zip(&plan.steps) {
-        let mut gk = kin.next();
         // The joint frame: parent pose ∘ placement, with the same skips.
         let rot_j = if st.rotates {
             xp.rot.mul_mat3(st.placement.rot)
@@ -132,15 +136,9 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             data.pose[i] = xs[k];
             data.s[i] = ss[k];
         }
-        if let Some(gk) = gk.as_mut() {
-            gk.s = s;
-        }
         // (a kinematics-only `Data` has no reference inertias)
         if with_inertia {
             let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
-            if let Some(gk) = gk.as_mut() {
-                gk.inertia = inertia;
-            }
             let (mass, com, ic) = (
                 inertia.mass.to_array(),
                 inertia.com.lanes(),
@@ -152,9 +150,6 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         }
         if let Some(v) = v {
             let vel = vp.add(s.scale(gather(v, &st.idx_v)));
-            if let Some(gk) = gk.as_mut() {
-                gk.vel = vel;
-            }
             let vs = vel.lanes();
             for k in 0..LEGS {
                 data.vel[grp[k]] = vs[k];
@@ -162,15 +157,6 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             vp = vel;
         }
         xp = x;
-    }
-}
-
-/// Copies the legs' per-body velocities into `data.leg_kin` (after
-/// forward kinematics' velocity-only update, which writes the per-body ones);
-/// nothing for a kinematics-only `Data`, which has no lane copies.
-pub(crate) fn refresh_velocities(plan: &LegLanes, data: &mut Data) {
-    for (grp, gk) in plan.groups.iter().zip(data.leg_kin.iter_mut()) {
-        gk.vel = Motion4::from_lanes(grp.map(|i| data.vel[i]));
     }
 }
 
@@ -207,7 +193,6 @@ pub(crate) fn aba_passes_legs(
     let armature = &model.armature[..nv];
     let (v, tau) = (&v[..nv], &tau[..nv]);
     let f_ext = &data.f_ext[..n];
-    let kin = &data.leg_kin[..ng];
     // ABA's per-group workspace, from pass 2 to pass 3 of this call only.
     let mut work_all = [GroupAba::default(); MAX_GROUPS];
     let work = &mut work_all[..ng];
@@ -225,11 +210,7 @@ pub(crate) fn aba_passes_legs(
     for g in (0..ng).rev() {
         let grp = &groups[g];
         let st = &plan.steps[g];
-        let GroupKin {
-            s,
-            inertia,
-            vel: vi,
-        } = kin[g];
+        let (s, inertia, vi) = group_kinematics(grp, data);
         let mut ia = inertia.to_sym6();
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
@@ -253,6 +234,7 @@ pub(crate) fn aba_passes_legs(
         };
         let pa = pai.add(ia_c).add(u.scale(ut.sub(c.dot(u)).mul(d_inv)));
         work[g] = GroupAba {
+            s,
             u,
             d_inv,
             u_tau: ut,
@@ -295,14 +277,14 @@ pub(crate) fn aba_passes_legs(
     let mut a_parent = Motion4::splat(a0);
     let acc = &mut data.acc[..n];
     let ddq = &mut data.ddq[..nv];
-    for (((grp, st), w), gk) in groups.iter().zip(&plan.steps).zip(work.iter()).zip(kin) {
+    for ((grp, st), w) in groups.iter().zip(&plan.steps).zip(work.iter()) {
         let a = a_parent.add(w.c);
         let qdd = w
             .u_tau
             .sub(w.u.lin.dot(a.lin))
             .sub(w.u.ang.dot(a.ang))
             .mul(w.d_inv);
-        let a_i = a.add(gk.s.scale(qdd));
+        let a_i = a.add(w.s.scale(qdd));
         let (qdds, accs) = (qdd.to_array(), a_i.add(a_grav_l).lanes());
         for k in 0..LEGS {
             ddq[st.idx_v[k]] = qdds[k];

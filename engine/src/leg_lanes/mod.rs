@@ -24,7 +24,7 @@ mod avx;
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{GroupKin, GroupStep, aba_passes_legs, poses_legs, refresh_velocities};
+pub(crate) use avx::{GroupStep, aba_passes_legs, poses_legs};
 
 use crate::model::{JointType, Model};
 
@@ -97,11 +97,6 @@ impl LegLanes {
         })
     }
 }
-
-/// Placeholder of the lane copies in [`crate::Data`] where there are no lanes.
-#[cfg(not(target_arch = "x86_64"))]
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupKin;
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
@@ -224,8 +219,7 @@ mod tests {
         assert_eq!(bits(&outs[0]), bits(&outs[1]));
     }
 
-    /// A kinematics-only `Data` (no lane copies kept for ABA, no reference
-    /// inertias) gets the same poses, subspaces and velocities as a full
+    /// A kinematics-only `Data` (no reference inertias) gets the same poses, subspaces and velocities as a full
     /// one, on the full and the velocity-only path, in lanes and not.
     #[test]
     fn kinematics_only_data_gets_the_same_kinematics() {
@@ -257,7 +251,7 @@ mod tests {
             bits(&all)
         };
         let (mut full, mut light) = (Data::new(m), Data::for_kinematics(m));
-        assert!(light.leg_kin.is_empty() && light.inertia_ref.is_empty());
+        assert!(light.inertia_ref.is_empty());
         for v in [&v0, &v1] {
             forward_kinematics(m, &mut full, &q, v);
             forward_kinematics(m, &mut light, &q, v);
