@@ -105,6 +105,10 @@ pub fn spawn_robot_with_base(world: &mut World, desc: &RobotDescription, base: B
         };
         spawn_joint(world, root, j, connection);
     }
+    // kept as long as the robot
+    if let Some(mut parts) = world.get_mut::<RobotParts>(root) {
+        parts.shrink_to_fit();
+    }
     root
 }
 
@@ -270,6 +274,8 @@ pub fn describe_robot_with_links(
         j.spring = ent.get::<SpringDamper>().map(|s| s.0);
         desc.joints.push(j);
     }
+    // the compiled robot keeps the link list
+    links.shrink_to_fit();
     Ok((desc, links))
 }
 
