@@ -11,8 +11,9 @@ use glam::DVec3;
 
 /// Workspace and outputs of the algorithms, grouped by the stage that writes them.
 /// What holds nothing from one call to the next (ABA's and CRBA's per-body
-/// workspace, the mass matrix, RK4's stages) is one per thread instead
-/// (`BodyScratch`, [`crate::crba::MassMatrix`]), not one per robot.
+/// workspace, the legs-in-lanes ABA's per-group one, the mass matrix, RK4's
+/// stages) is one per thread instead (`BodyScratch`,
+/// [`crate::crba::MassMatrix`]), not one per robot.
 #[derive(Clone, Debug)]
 pub struct Data {
     // --- kinematics (forward_kinematics) ---
@@ -78,6 +79,10 @@ impl Data {
     pub fn new(model: &Model) -> Data {
         BodyScratch::take(model.nbodies).give_back();
         crate::crba::MassMatrix::reserve(model);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(plan) = &model.leg_lanes {
+            crate::leg_lanes::reserve_workspace(plan);
+        }
         Data::allocate(model, true)
     }
 

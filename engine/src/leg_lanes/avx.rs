@@ -1,11 +1,11 @@
 //! The lane passes of [`super`]: forward kinematics and ABA with one AVX lane
 //! per leg. Each statement mirrors the general path's (named in comments).
 
+use super::LEGS;
 use super::LegLanes;
 use super::x4::{
     F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis,
 };
-use super::{LEGS, MAX_GROUPS};
 use crate::data::Data;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion, RigidInertia, Sym6};
@@ -65,20 +65,44 @@ impl GroupStep {
 /// filled (kept nowhere else: ABA in lanes gathers them per call).
 #[inline(always)]
 fn group_kinematics(grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
-    let ri = grp.map(|i| data.inertia_ref[i]);
-    (
-        Motion4::from_lanes(grp.map(|i| data.s[i])),
-        Inertia4 {
-            mass: F4::from_array(ri.map(|r| r.mass)),
-            com: V3::from_lanes(ri.map(|r| r.com)),
-            inertia_com: M3::from_lanes(ri.map(|r| r.inertia_com)),
-        },
-        Motion4::from_lanes(grp.map(|i| data.vel[i])),
-    )
+    // element by element from the four bodies, no copies of whole structs
+    let [a, b, c, d] = *grp;
+    let v3 = |p: [&DVec3; LEGS]| {
+        V3::new(
+            F4::from_array([p[0].x, p[1].x, p[2].x, p[3].x]),
+            F4::from_array([p[0].y, p[1].y, p[2].y, p[3].y]),
+            F4::from_array([p[0].z, p[1].z, p[2].z, p[3].z]),
+        )
+    };
+    let motion = |m: &[Motion]| {
+        let (ma, mb, mc, md) = (&m[a], &m[b], &m[c], &m[d]);
+        Motion4::new(
+            v3([&ma.lin, &mb.lin, &mc.lin, &md.lin]),
+            v3([&ma.ang, &mb.ang, &mc.ang, &md.ang]),
+        )
+    };
+    let ir = &data.inertia_ref;
+    let (ia, ib, ic, id) = (&ir[a], &ir[b], &ir[c], &ir[d]);
+    let (ja, jb, jc, jd) = (
+        &ia.inertia_com,
+        &ib.inertia_com,
+        &ic.inertia_com,
+        &id.inertia_com,
+    );
+    let inertia = Inertia4 {
+        mass: F4::from_array([ia.mass, ib.mass, ic.mass, id.mass]),
+        com: v3([&ia.com, &ib.com, &ic.com, &id.com]),
+        inertia_com: M3::from_cols(
+            v3([&ja.x_axis, &jb.x_axis, &jc.x_axis, &jd.x_axis]),
+            v3([&ja.y_axis, &jb.y_axis, &jc.y_axis, &jd.y_axis]),
+            v3([&ja.z_axis, &jb.z_axis, &jc.z_axis, &jd.z_axis]),
+        ),
+    };
+    (motion(&data.s), inertia, motion(&data.vel))
 }
 
-/// What ABA's last pass needs of one group, kept from the inward pass (on
-/// the stack of one ABA call).
+/// What ABA's last pass needs of one group, kept from the inward pass (one
+/// per thread: it holds nothing between calls).
 #[derive(Clone, Copy, Debug, Default)]
 struct GroupAba {
     /// Motion subspace columns, reference frame.
@@ -175,8 +199,8 @@ fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6
 
 /// ABA's three passes after forward kinematics, legs in lanes
 /// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
-/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) is in a per-group array on the
-/// stack and locals instead.
+/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) is in the thread's per-group
+/// workspace and locals instead.
 #[target_feature(enable = "avx")]
 pub(crate) fn aba_passes_legs(
     model: &Model,
@@ -194,7 +218,7 @@ pub(crate) fn aba_passes_legs(
     let (v, tau) = (&v[..nv], &tau[..nv]);
     let f_ext = &data.f_ext[..n];
     // ABA's per-group workspace, from pass 2 to pass 3 of this call only.
-    let mut work_all = [GroupAba::default(); MAX_GROUPS];
+    let mut work_all = take_group_aba(ng);
     let work = &mut work_all[..ng];
     // Pass 1 of the base; its children's terms are added below.
     let (mut ia0, mut pa0) = base_pass1(
@@ -299,4 +323,26 @@ pub(crate) fn aba_passes_legs(
         let aa = rt * a0_true.ang;
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
+    GROUP_ABA.with(|cell| drop(cell.replace(work_all)));
+}
+
+thread_local! {
+    static GROUP_ABA: std::cell::RefCell<Vec<GroupAba>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// This thread's ABA workspace of `ng` groups (every entry is written by
+/// pass 2 before pass 3 reads it), lent until given back.
+fn take_group_aba(ng: usize) -> Vec<GroupAba> {
+    let mut w = GROUP_ABA.with(std::cell::RefCell::take);
+    if w.len() < ng {
+        w.resize(ng, GroupAba::default());
+    }
+    w
+}
+
+/// Sizes this thread's ABA workspace for `plan` (by `Data::new`, so that
+/// stepping on the thread allocates nothing).
+pub(crate) fn reserve_workspace(plan: &LegLanes) {
+    let w = take_group_aba(plan.groups.len());
+    GROUP_ABA.with(|cell| drop(cell.replace(w)));
 }

@@ -24,17 +24,12 @@ mod avx;
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{GroupStep, aba_passes_legs, poses_legs};
+pub(crate) use avx::{GroupStep, aba_passes_legs, poses_legs, reserve_workspace};
 
 use crate::model::{JointType, Model};
 
 /// Legs per group: four f64 lanes fill one AVX register.
 pub const LEGS: usize = 4;
-
-/// Most groups (joints per leg) in lanes: ABA keeps its per-group workspace
-/// in an array of this length on the stack, not in [`crate::Data`]. Longer
-/// legs take the general path (the same bits).
-pub const MAX_GROUPS: usize = 6;
 
 /// The legs' bodies grouped by depth, decided once per model when the model
 /// is compiled, with what forward kinematics needs of each group in lanes.
@@ -61,7 +56,6 @@ impl LegLanes {
             || crate::kinematics::DIAGONAL_INERTIA_SHORTCUT
             || n < 1 + LEGS
             || !(n - 1).is_multiple_of(LEGS)
-            || (n - 1) / LEGS > MAX_GROUPS
             || m.depth_order.len() != n - 1
             || m.pose_step.len() != n
         {
