@@ -668,6 +668,8 @@ fn contact_points(model: &Model, desc: &RobotDescription, extra: &[String]) -> V
             }
         }
     }
+    // kept for the whole run, one per robot
+    points.shrink_to_fit();
     points
 }
 

@@ -11,7 +11,9 @@ use quadsim_engine::description::{Geometry, JointDesc, LinkDesc, RobotDescriptio
 use quadsim_engine::{BaseKind, ModelError};
 use thiserror::Error;
 
-use crate::collider::{Collider, ColliderOf, LinkColliders, LinkVisuals, Visual, VisualOf};
+use crate::collider::{
+    Collider, ColliderOf, LinkColliders, LinkVisuals, ShapeInterner, Visual, VisualOf,
+};
 use crate::joint::{
     EffortLimit, Joint, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
     JointPlacement, SpringDamper, VelocityLimit,
@@ -103,10 +105,15 @@ pub fn spawn_robot_with_base(world: &mut World, desc: &RobotDescription, base: B
         };
         spawn_joint(world, root, j, connection);
     }
+    // kept as long as the robot
+    if let Some(mut parts) = world.get_mut::<RobotParts>(root) {
+        parts.shrink_to_fit();
+    }
     root
 }
 
-/// Spawns one link entity of `robot` with its colliders and visuals.
+/// Spawns one link entity of `robot` with its colliders and visuals (their
+/// shapes shared with equal ones already spawned, see [`ShapeInterner`]).
 pub fn spawn_link(world: &mut World, robot: Entity, l: &LinkDesc) -> Entity {
     let mut e = world.spawn((
         Link {
@@ -120,11 +127,14 @@ pub fn spawn_link(world: &mut World, robot: Entity, l: &LinkDesc) -> Entity {
         e.insert(Inertia(i));
     }
     let link = e.id();
-    for g in &l.collision {
-        world.spawn((Collider::new(g.clone()), ColliderOf(link)));
+    let mut shapes = world.get_resource_or_insert_with(ShapeInterner::default);
+    let colliders: Vec<Collider> = l.collision.iter().map(|g| shapes.collider(g)).collect();
+    let visuals: Vec<Visual> = l.visual.iter().map(|g| shapes.visual(g)).collect();
+    for c in colliders {
+        world.spawn((c, ColliderOf(link)));
     }
-    for g in &l.visual {
-        world.spawn((Visual(g.clone()), VisualOf(link)));
+    for v in visuals {
+        world.spawn((v, VisualOf(link)));
     }
     link
 }
@@ -188,7 +198,7 @@ pub fn describe_robot_with_links(
                 .iter()
                 .filter_map(|&g| {
                     if visual {
-                        world.get::<Visual>(g).map(|v| v.0.clone())
+                        world.get::<Visual>(g).map(|v| Geometry::clone(&v.0))
                     } else {
                         world.get::<Collider>(g).map(|c| c.geometry().clone())
                     }
@@ -264,6 +274,8 @@ pub fn describe_robot_with_links(
         j.spring = ent.get::<SpringDamper>().map(|s| s.0);
         desc.joints.push(j);
     }
+    // the compiled robot keeps the link list
+    links.shrink_to_fit();
     Ok((desc, links))
 }
 

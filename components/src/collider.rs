@@ -1,6 +1,10 @@
 //! Geometry attached to links: collision shapes (parry3d) and visual shapes,
 //! each on its own entity pointing at its link, as avian's `ColliderOf` does.
 
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+use std::sync::{Arc, Weak};
+
 use bevy_ecs::prelude::*;
 use glam::DQuat;
 use parry3d_f64::math::Pose;
@@ -11,17 +15,23 @@ use quadsim_engine::description::{Geometry, Shape};
 /// shape built from it. Meshes become the convex hull of their vertices; a mesh
 /// whose vertices were not loaded (or whose hull cannot be built) stays a
 /// reference with no parry shape. Replace the whole component to edit it, so
-/// the two cannot disagree.
+/// the two cannot disagree. Immutable and shared: spawning takes colliders of
+/// the same geometry (bit for bit) from the world's [`ShapeInterner`], so the
+/// robots of one design hold one copy of each shape (and convex hull).
 #[derive(Component, Clone, Debug)]
 #[component(immutable)]
-pub struct Collider {
+pub struct Collider(Arc<ColliderShape>);
+
+/// What a [`Collider`] shares.
+#[derive(Debug)]
+struct ColliderShape {
     geometry: Geometry,
     shape: Option<SharedShape>,
     pose: Pose,
 }
 
 impl Collider {
-    /// Builds the parry3d shape for `geometry`.
+    /// Builds the parry3d shape for `geometry` (not shared; see [`ShapeInterner::collider`]).
     pub fn new(geometry: Geometry) -> Self {
         let origin = &geometry.origin;
         let placement = Pose::from_parts(origin.trans, origin.quat());
@@ -54,35 +64,151 @@ impl Collider {
                 placement,
             ),
         };
-        Self {
+        Self(Arc::new(ColliderShape {
             geometry,
             shape,
             pose,
-        }
+        }))
     }
 
     /// The description this collider was built from (shape frame in the link frame).
     pub fn geometry(&self) -> &Geometry {
-        &self.geometry
+        &self.0.geometry
     }
 
     /// The parry3d shape, `None` for a mesh kept by reference.
     pub fn shape(&self) -> Option<&SharedShape> {
-        self.shape.as_ref()
+        self.0.shape.as_ref()
     }
 
     /// Pose of the parry3d shape in the link frame (includes the cylinder's
     /// y-to-z quarter turn, so it can differ from the geometry's origin).
     pub fn pose(&self) -> Pose {
-        self.pose
+        self.0.pose
     }
 }
 
 impl PartialEq for Collider {
     /// Colliders are equal when their descriptions are (the parry shape follows from it).
     fn eq(&self, other: &Self) -> bool {
-        self.geometry == other.geometry
+        self.geometry() == other.geometry()
     }
+}
+
+/// Shares the [`Collider`] and [`Visual`] of equal geometries (bit for bit)
+/// between the links that spawn them, so that a herd of one design holds one
+/// copy of each shape: a resource that [`crate::spawn_link`] creates on first
+/// use. It holds weak references only (a shape lives as long as an entity
+/// uses it) and forgets dead ones as it grows.
+#[derive(Resource, Debug, Default)]
+pub struct ShapeInterner {
+    colliders: HashMap<u64, Vec<Weak<ColliderShape>>>,
+    visuals: HashMap<u64, Vec<Weak<Geometry>>>,
+    /// Entries added since dead ones were last dropped.
+    added: usize,
+}
+
+impl ShapeInterner {
+    /// A collider for `geometry`: a live one of the same geometry, else a new one.
+    pub fn collider(&mut self, geometry: &Geometry) -> Collider {
+        let key = geometry_bits(geometry);
+        let h = hash_bits(&key);
+        let found = self.colliders.get(&h).and_then(|list| {
+            list.iter()
+                .filter_map(Weak::upgrade)
+                .find(|c| geometry_bits(&c.geometry) == key)
+        });
+        if let Some(c) = found {
+            return Collider(c);
+        }
+        let c = Collider::new(geometry.clone());
+        self.colliders
+            .entry(h)
+            .or_default()
+            .push(Arc::downgrade(&c.0));
+        self.note_added();
+        c
+    }
+
+    /// A visual for `geometry`: a live one of the same geometry, else a new one.
+    pub fn visual(&mut self, geometry: &Geometry) -> Visual {
+        let key = geometry_bits(geometry);
+        let h = hash_bits(&key);
+        let found = self.visuals.get(&h).and_then(|list| {
+            list.iter()
+                .filter_map(Weak::upgrade)
+                .find(|g| geometry_bits(g) == key)
+        });
+        if let Some(g) = found {
+            return Visual(g);
+        }
+        let g = Arc::new(geometry.clone());
+        self.visuals.entry(h).or_default().push(Arc::downgrade(&g));
+        self.note_added();
+        Visual(g)
+    }
+
+    /// Drops the dead entries once as many were added as the interner holds.
+    fn note_added(&mut self) {
+        self.added += 1;
+        if self.added > self.colliders.len() + self.visuals.len() {
+            self.colliders.retain(|_, l| {
+                l.retain(|w| w.strong_count() > 0);
+                !l.is_empty()
+            });
+            self.visuals.retain(|_, l| {
+                l.retain(|w| w.strong_count() > 0);
+                !l.is_empty()
+            });
+            self.added = 0;
+        }
+    }
+}
+
+/// Every number of a geometry as its bits (and the mesh URI's bytes), so that
+/// only identical geometries share a shape (`==` would join 0.0 and −0.0).
+fn geometry_bits(g: &Geometry) -> Vec<u64> {
+    let mut k: Vec<u64> = g.origin.rot.to_cols_array().map(f64::to_bits).to_vec();
+    let v3 = |k: &mut Vec<u64>, v: glam::DVec3| k.extend(v.to_array().map(f64::to_bits));
+    v3(&mut k, g.origin.trans);
+    match &g.shape {
+        Shape::Box { size_m } => {
+            k.push(0);
+            v3(&mut k, *size_m);
+        }
+        Shape::Cylinder { radius_m, length_m } => {
+            k.extend([1, radius_m.to_bits(), length_m.to_bits()]);
+        }
+        Shape::Sphere { radius_m } => k.extend([2, radius_m.to_bits()]),
+        Shape::Capsule { radius_m, length_m } => {
+            k.extend([3, radius_m.to_bits(), length_m.to_bits()]);
+        }
+        Shape::Mesh {
+            uri,
+            scale,
+            vertices,
+        } => {
+            k.extend([4, uri.len() as u64]);
+            k.extend(uri.bytes().map(u64::from));
+            v3(&mut k, *scale);
+            match vertices {
+                None => k.push(0),
+                Some(vs) => {
+                    k.extend([1, vs.len() as u64]);
+                    for &p in vs {
+                        v3(&mut k, p);
+                    }
+                }
+            }
+        }
+    }
+    k
+}
+
+fn hash_bits(key: &[u64]) -> u64 {
+    let mut h = std::hash::DefaultHasher::new();
+    key.hash(&mut h);
+    h.finish()
 }
 
 /// On a collider entity: the link it is attached to.
@@ -95,10 +221,11 @@ pub struct ColliderOf(pub Entity);
 #[relationship_target(relationship = ColliderOf, linked_spawn)]
 pub struct LinkColliders(Vec<Entity>);
 
-/// A display-only shape of a link (shape frame in the link frame).
+/// A display-only shape of a link (shape frame in the link frame). Shared
+/// between links of equal geometry (see [`ShapeInterner`]).
 #[derive(Component, Clone, Debug, PartialEq)]
 #[component(immutable)]
-pub struct Visual(pub Geometry);
+pub struct Visual(pub Arc<Geometry>);
 
 /// On a visual entity: the link it is attached to.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]

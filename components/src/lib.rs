@@ -63,7 +63,9 @@ pub use build::{
     CompileError, DescribeError, describe_robot, describe_robot_with_links, spawn_joint,
     spawn_link, spawn_robot, spawn_robot_with_base,
 };
-pub use collider::{Collider, ColliderOf, LinkColliders, LinkVisuals, Visual, VisualOf};
+pub use collider::{
+    Collider, ColliderOf, LinkColliders, LinkVisuals, ShapeInterner, Visual, VisualOf,
+};
 pub use external::ExternalJoint;
 pub use forces::{ContactForces, Ground, Push, Terrain};
 pub use joint::{

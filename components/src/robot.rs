@@ -32,6 +32,13 @@ pub struct BelongsTo(pub Entity);
 #[relationship_target(relationship = BelongsTo, linked_spawn)]
 pub struct RobotParts(Vec<Entity>);
 
+impl RobotParts {
+    /// Frees the list's spare capacity (it grows by doubling while the robot spawns).
+    pub(crate) fn shrink_to_fit(&mut self) {
+        self.0.shrink_to_fit();
+    }
+}
+
 /// On a compiled robot root: its slot in [`crate::RobotBatch::sims`]. Written
 /// by the compile stage only; slots are renumbered when robots are despawned.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]

@@ -361,3 +361,44 @@ fn thread_pool_has_the_requested_size() {
         assert_eq!(seen, n);
     }
 }
+
+/// Robots of one design share each collider's shape (the convex hull
+/// included) and each visual; a geometry that differs, if only in the sign
+/// of a zero, gets its own, and the shared ones read back as the description.
+#[test]
+fn robots_of_one_design_share_their_shapes() {
+    let d = rich_description();
+    let mut world = World::new();
+    let a = spawn_robot(&mut world, &d);
+    let b = spawn_robot(&mut world, &d);
+    let (ha, hb) = (
+        collider(&world, a, "foot", 1),
+        collider(&world, b, "foot", 1),
+    );
+    let same_shape = |x: &Collider, y: &Collider| {
+        std::ptr::eq(
+            std::ptr::from_ref(x.shape().unwrap().as_ref()).cast::<u8>(),
+            std::ptr::from_ref(y.shape().unwrap().as_ref()).cast::<u8>(),
+        )
+    };
+    assert!(same_shape(&ha, &hb), "one hull for both robots");
+    let visuals: Vec<&Visual> = world.query::<&Visual>().iter(&world).collect();
+    let n = visuals.len() / 2;
+    for k in 0..n {
+        assert!(std::sync::Arc::ptr_eq(&visuals[k].0, &visuals[n + k].0));
+    }
+    // −0.0 for 0.0 in the torso box's origin: equal by `==`, not by bits
+    let mut e = d.clone();
+    let torso = e.links.iter_mut().find(|l| l.name == "torso").unwrap();
+    torso.collision[0].origin.trans.x = -0.0;
+    let c = spawn_robot(&mut world, &e);
+    let tc = collider(&world, c, "torso", 0);
+    assert!(!same_shape(&collider(&world, a, "torso", 0), &tc));
+    assert_eq!(tc.geometry().origin.trans.x.to_bits(), (-0.0f64).to_bits());
+    assert!(same_shape(
+        &collider(&world, a, "foot", 1),
+        &collider(&world, c, "foot", 1)
+    ));
+    assert_eq!(describe_robot(&world, b).unwrap(), d);
+    assert_eq!(describe_robot(&world, c).unwrap(), e);
+}

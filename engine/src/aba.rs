@@ -2,7 +2,7 @@
 //! in O(n) (Featherstone 2008, §7.3, Table 7.1, in the fixed-frame form where
 //! articulated inertias add without transforms; floating base per §9.2).
 
-use crate::data::Data;
+use crate::data::{BodyScratch, Data};
 use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion, outer};
@@ -53,12 +53,13 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
     let vel = &data.vel[..n];
     let s_all = &data.s[..n];
     let f_ext = &data.f_ext[..n];
-    let ia_all = &mut data.ia[..n];
-    let pa_all = &mut data.pa[..n];
-    let c_all = &mut data.c[..n];
-    let u_all = &mut data.u[..n];
-    let d_inv_all = &mut data.d_inv[..n];
-    let u_tau_all = &mut data.u_tau[..n];
+    let mut w = BodyScratch::take(n);
+    let ia_all = &mut w.ia[..n];
+    let pa_all = &mut w.pa[..n];
+    let c_all = &mut w.c[..n];
+    let u_all = &mut w.u[..n];
+    let d_inv_all = &mut w.d_inv[..n];
+    let u_tau_all = &mut w.u_tau[..n];
     // Pass 1: bias forces and velocity-product accelerations.
     for i in 0..n {
         let inertia = &inertia_ref[i];
@@ -109,8 +110,8 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
                 r * DVec3::new(tau[0], tau[1], tau[2]),
                 r * DVec3::new(tau[3], tau[4], tau[5]),
             );
-            let rhs = applied - data.pa[0];
-            match data.ia[0].solve(rhs) {
+            let rhs = applied - pa_all[0];
+            match ia_all[0].solve(rhs) {
                 Some(a) => a,
                 None => Motion::new(DVec3::NAN, DVec3::NAN),
             }
@@ -120,9 +121,8 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
     data.acc[0] = a0;
     for &i in &model.depth_order {
         let iv = model.idx_v[i];
-        let a = data.acc[model.parent[i]] + data.c[i];
-        let qdd =
-            (data.u_tau[i] - data.u[i].lin.dot(a.lin) - data.u[i].ang.dot(a.ang)) * data.d_inv[i];
+        let a = data.acc[model.parent[i]] + c_all[i];
+        let qdd = (u_tau_all[i] - u_all[i].lin.dot(a.lin) - u_all[i].ang.dot(a.ang)) * d_inv_all[i];
         data.ddq[iv] = qdd;
         data.acc[i] = a + data.s[i] * qdd;
     }
@@ -133,6 +133,7 @@ fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_extern
         let aa = rt * a0_true.ang;
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
+    w.give_back();
     // Leave `acc` as true spatial accelerations for callers.
     for i in 0..model.nbodies {
         data.acc[i] += a_grav;

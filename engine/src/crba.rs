@@ -2,32 +2,82 @@
 //! (Featherstone 2008, §6.2, Table 6.2, in the fixed frame, where composite
 //! inertias add without transforms).
 
-use crate::data::Data;
+use crate::data::{BodyScratch, Data};
 use crate::kinematics::forward_kinematics_pos;
 use crate::model::{JointType, Model, NO_PARENT};
 
-/// Fills and returns `data.mass_matrix` (nv × nv, row-major, full symmetric),
-/// armature included on the diagonal.
-pub fn crba<'d>(model: &Model, data: &'d mut Data, q: &[f64]) -> &'d [f64] {
+/// The joint-space mass matrix (nv × nv, row-major, full symmetric),
+/// armature included on the diagonal. It lives in a buffer of the calling
+/// thread, lent while this value lives (it derefs to `[f64]`) and returned
+/// when it drops: read it and let it go. A robot's [`Data`] holds none (most
+/// steps need no mass matrix); holding two at once on one thread allocates.
+#[derive(Debug)]
+pub struct MassMatrix(Vec<f64>);
+
+thread_local! {
+    static MASS_MATRIX: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl MassMatrix {
+    /// This thread's buffer, `n` zeros.
+    fn zeros(n: usize) -> MassMatrix {
+        let mut m = MASS_MATRIX.with(std::cell::RefCell::take);
+        m.clear();
+        m.resize(n, 0.0);
+        MassMatrix(m)
+    }
+
+    /// Sizes this thread's buffer for `model` (by [`Data::new`], so that
+    /// stepping on the thread allocates nothing).
+    pub(crate) fn reserve(model: &Model) {
+        drop(MassMatrix::zeros(model.nv * model.nv));
+    }
+}
+
+impl std::ops::Deref for MassMatrix {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        &self.0
+    }
+}
+
+impl Drop for MassMatrix {
+    fn drop(&mut self) {
+        let m = std::mem::take(&mut self.0);
+        MASS_MATRIX.with(|cell| {
+            let mut held = cell.borrow_mut();
+            if held.capacity() < m.capacity() {
+                *held = m;
+            }
+        });
+    }
+}
+
+/// The mass matrix at `q` (see [`MassMatrix`]).
+pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> MassMatrix {
     forward_kinematics_pos(model, data, q);
-    crba_from_kinematics(model, data);
-    &data.mass_matrix
+    crba_from_kinematics(model, data)
 }
 
 /// CRBA after [`forward_kinematics_pos`] on the same `q`.
-pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
+pub fn crba_from_kinematics(model: &Model, data: &mut Data) -> MassMatrix {
     let nv = model.nv;
+    // entries of bodies on different branches stay zero
+    let mut out = MassMatrix::zeros(nv * nv);
+    // composite inertias, in this thread's workspace
+    let mut w = BodyScratch::take(model.nbodies);
+    let ia = &mut w.ia;
     for i in 0..model.nbodies {
-        data.ia[i] = data.inertia_ref[i].to_sym6();
+        ia[i] = data.inertia_ref[i].to_sym6();
     }
     for i in (1..model.nbodies).rev() {
-        let ic = data.ia[i];
-        data.ia[model.parent[i]] += ic;
+        let ic = ia[i];
+        ia[model.parent[i]] += ic;
     }
-    let mm = &mut data.mass_matrix;
+    let mm = &mut out.0;
     for i in (1..model.nbodies).rev() {
         let iv = model.idx_v[i];
-        let f = data.ia[i].mul_motion(data.s[i]);
+        let f = ia[i].mul_motion(data.s[i]);
         mm[iv * nv + iv] = data.s[i].dot(f) + model.armature[iv];
         let mut j = model.parent[i];
         while j != NO_PARENT {
@@ -52,7 +102,7 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
     }
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
-            let f = data.ia[0].mul_motion(data.s_base[k]);
+            let f = ia[0].mul_motion(data.s_base[k]);
             for l in k..6 {
                 let x = data.s_base[l].dot(f);
                 mm[l * nv + k] = x;
@@ -60,4 +110,6 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) {
             }
         }
     }
+    w.give_back();
+    out
 }

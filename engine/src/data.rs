@@ -5,12 +5,15 @@
 //! world-fixed point [`Data::origin`] that coincides with the base origin when
 //! [`crate::kinematics::forward_kinematics`] last ran.
 
-use crate::leg_lanes::{GroupAba, GroupKin};
 use crate::model::Model;
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
 
 /// Workspace and outputs of the algorithms, grouped by the stage that writes them.
+/// What holds nothing from one call to the next (ABA's and CRBA's per-body
+/// workspace, the legs-in-lanes ABA's per-group one, the mass matrix, RK4's
+/// stages) is one per thread instead (`BodyScratch`,
+/// [`crate::crba::MassMatrix`]), not one per robot.
 #[derive(Clone, Debug)]
 pub struct Data {
     // --- kinematics (forward_kinematics) ---
@@ -24,7 +27,8 @@ pub struct Data {
     pub s: Vec<Motion>,
     /// Motion subspace of the free base, reference frame: columns for `v[0..6]`.
     pub s_base: [Motion; 6],
-    /// Each body's rigid inertia in the reference frame (CoM relative to `origin`) (nbodies).
+    /// Each body's rigid inertia in the reference frame (CoM relative to `origin`)
+    /// (nbodies; empty in a kinematics-only `Data`).
     pub inertia_ref: Vec<RigidInertia>,
 
     // --- dynamics (rnea / aba / crba) ---
@@ -35,33 +39,12 @@ pub struct Data {
     /// External spatial force on each body, world axes about `origin` (nbodies).
     /// Set by the caller (contacts, pushes) after kinematics; see [`Data::add_point_force`].
     pub f_ext: Vec<Force>,
-    /// Articulated (ABA) or composite (CRBA) inertia of each body, reference frame (nbodies).
-    pub ia: Vec<Sym6>,
-    /// Articulated bias force (ABA) (nbodies).
-    pub pa: Vec<Force>,
-    /// `U = Iᴬ S` for each 1-DOF body (ABA) (nbodies).
-    pub u: Vec<Force>,
-    /// `1 / D`, `D = Sᵀ U + armature` (ABA) (nbodies).
-    pub d_inv: Vec<f64>,
-    /// `u = τ − Sᵀ pᴬ` (ABA) (nbodies).
-    pub u_tau: Vec<f64>,
-    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (nbodies).
-    pub c: Vec<Motion>,
-    /// ABA's workspace of the legs' groups when the model has them
-    /// ([`Model::leg_lanes`]); `ia`, `pa`, `u`, `d_inv`, `u_tau` and `c`
-    /// are then not written by ABA.
-    pub(crate) leg_aba: Vec<GroupAba>,
-    /// Forward kinematics of the legs' groups in lanes, beside `s`,
-    /// `inertia_ref` and `vel` (which hold the same numbers per body).
-    pub(crate) leg_kin: Vec<GroupKin>,
 
     // --- outputs ---
     /// Generalised acceleration from ABA (nv).
     pub ddq: Vec<f64>,
     /// Generalised force from RNEA (nv).
     pub tau: Vec<f64>,
-    /// Joint-space mass matrix from CRBA, full symmetric, row-major (nv × nv).
-    pub mass_matrix: Vec<f64>,
     /// Nonlinear effects `C(q, v) v + g(q)` (nv).
     pub nle: Vec<f64>,
     /// Generalised gravity `g(q)` (nv).
@@ -89,16 +72,26 @@ pub(crate) struct KinematicsKey {
 }
 
 impl Data {
-    /// Allocates the workspace for `model`.
+    /// Allocates the workspace for `model` (and sizes this thread's ABA and
+    /// CRBA workspace, `BodyScratch`, and mass-matrix buffer,
+    /// [`crate::crba::MassMatrix`], for it, so that stepping on this thread
+    /// allocates nothing from the first step).
     pub fn new(model: &Model) -> Data {
+        BodyScratch::take(model.nbodies).give_back();
+        crate::crba::MassMatrix::reserve(model);
+        #[cfg(target_arch = "x86_64")]
+        if let Some(plan) = &model.leg_lanes {
+            crate::leg_lanes::reserve_workspace(plan);
+        }
         Data::allocate(model, true)
     }
 
     /// A workspace for [`crate::kinematics::forward_kinematics`] and the
-    /// point queries on its result only (poses, subspaces, velocities,
-    /// reference inertias): the dynamics arrays are left empty, so the
-    /// dynamics algorithms must not be run on it. For state estimators,
-    /// which need a second copy of a robot's kinematics and nothing else.
+    /// point queries on its result only (poses, subspaces, velocities): the
+    /// reference inertias and the dynamics arrays are left empty (and not
+    /// computed), so neither the dynamics algorithms nor the CoM and energy
+    /// functions must be run on it. For state estimators, which need a
+    /// second copy of a robot's kinematics and nothing else.
     pub fn for_kinematics(model: &Model) -> Data {
         Data::allocate(model, false)
     }
@@ -107,7 +100,6 @@ impl Data {
     fn allocate(model: &Model, dynamics: bool) -> Data {
         let nb = model.nbodies;
         let nv = model.nv;
-        let leg_groups = model.leg_lanes.as_ref().map_or(0, |p| p.groups.len());
         // `n` elements of `x` with the dynamics, none without
         fn dyn_vec<T: Clone>(dynamics: bool, x: T, n: usize) -> Vec<T> {
             if dynamics { vec![x; n] } else { Vec::new() }
@@ -118,22 +110,12 @@ impl Data {
             vel: vec![Motion::ZERO; nb],
             s: vec![Motion::ZERO; nb],
             s_base: [Motion::ZERO; 6],
-            inertia_ref: vec![RigidInertia::ZERO; nb],
+            inertia_ref: dyn_vec(dynamics, RigidInertia::ZERO, nb),
             acc: dyn_vec(dynamics, Motion::ZERO, nb),
             f: dyn_vec(dynamics, Force::ZERO, nb),
             f_ext: dyn_vec(dynamics, Force::ZERO, nb),
-            ia: dyn_vec(dynamics, Sym6::ZERO, nb),
-            pa: dyn_vec(dynamics, Force::ZERO, nb),
-            u: dyn_vec(dynamics, Force::ZERO, nb),
-            d_inv: dyn_vec(dynamics, 0.0, nb),
-            u_tau: dyn_vec(dynamics, 0.0, nb),
-            c: dyn_vec(dynamics, Motion::ZERO, nb),
-            leg_aba: dyn_vec(dynamics, GroupAba::default(), leg_groups),
-            // forward kinematics with the legs in lanes writes these
-            leg_kin: vec![GroupKin::default(); leg_groups],
             ddq: dyn_vec(dynamics, 0.0, nv),
             tau: dyn_vec(dynamics, 0.0, nv),
-            mass_matrix: dyn_vec(dynamics, 0.0, nv * nv),
             nle: dyn_vec(dynamics, 0.0, nv),
             gravity: dyn_vec(dynamics, 0.0, nv),
             jacobian: dyn_vec(dynamics, 0.0, 3 * nv),
@@ -182,5 +164,53 @@ impl Data {
     pub fn body_point_velocity(&self, body: usize, point_in_body: DVec3) -> DVec3 {
         let p = self.pose[body].transform_point(point_in_body);
         self.vel[body].point_velocity(p - self.origin)
+    }
+}
+
+/// ABA's and CRBA's per-body workspace (reference frame, nbodies each): it
+/// holds nothing from one call to the next, so it is one per thread, not one
+/// per robot's [`Data`]. Sized to the largest model the thread has run
+/// (allocating on a thread's first call only).
+#[derive(Debug, Default)]
+pub(crate) struct BodyScratch {
+    /// Articulated (ABA) or composite (CRBA) inertia of each body.
+    pub(crate) ia: Vec<Sym6>,
+    /// Articulated bias force (ABA).
+    pub(crate) pa: Vec<Force>,
+    /// `U = Iᴬ S` for each 1-DOF body (ABA).
+    pub(crate) u: Vec<Force>,
+    /// `1 / D`, `D = Sᵀ U + armature` (ABA).
+    pub(crate) d_inv: Vec<f64>,
+    /// `u = τ − Sᵀ pᴬ` (ABA).
+    pub(crate) u_tau: Vec<f64>,
+    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (ABA).
+    pub(crate) c: Vec<Motion>,
+}
+
+thread_local! {
+    static BODY_SCRATCH: std::cell::RefCell<BodyScratch> =
+        std::cell::RefCell::new(BodyScratch::default());
+}
+
+impl BodyScratch {
+    /// This thread's workspace with at least `nbodies` entries per array,
+    /// lent until [`BodyScratch::give_back`]. Every algorithm writes an entry
+    /// before reading it: what it held before does not matter.
+    pub(crate) fn take(nbodies: usize) -> BodyScratch {
+        let mut s = BODY_SCRATCH.with(std::cell::RefCell::take);
+        if s.ia.len() < nbodies {
+            s.ia.resize(nbodies, Sym6::ZERO);
+            s.pa.resize(nbodies, Force::ZERO);
+            s.u.resize(nbodies, Force::ZERO);
+            s.d_inv.resize(nbodies, 0.0);
+            s.u_tau.resize(nbodies, 0.0);
+            s.c.resize(nbodies, Motion::ZERO);
+        }
+        s
+    }
+
+    /// Returns the workspace to this thread.
+    pub(crate) fn give_back(self) {
+        BODY_SCRATCH.with(|cell| drop(cell.replace(self)));
     }
 }

@@ -171,15 +171,12 @@ pub struct StepWorkspace {
     pub(crate) tau_actuator: Vec<f64>,
     /// Total generalised force of the current stage (nv).
     pub(crate) tau: Vec<f64>,
-    /// Stage configuration (nq) and its unit-quaternion copy used for dynamics (nq).
+    /// The integrated configuration (nq), copied into the state.
     pub(crate) q_stage: Vec<f64>,
-    q_eval: Vec<f64>,
-    /// Stage velocity (nv).
-    v_stage: Vec<f64>,
-    /// Configuration derivatives of the four stages, embedded coordinates (4 × nq).
-    dq: [Vec<f64>; 4],
-    /// Accelerations of the four stages (4 × nv).
-    pub(crate) dv: [Vec<f64>; 4],
+    /// Acceleration of the step's first derivative evaluation (nv). RK4's
+    /// other stage buffers hold nothing between steps: one per thread
+    /// ([`Rk4Stages`]).
+    pub(crate) dv0: Vec<f64>,
     /// Hybrid dynamics: when set, the joints follow this motion and the
     /// actuator torques are its output, not an input (see [`ImposedJoints`]).
     pub imposed: Option<ImposedJoints>,
@@ -248,18 +245,17 @@ impl ImposedJoints {
 }
 
 impl StepWorkspace {
-    /// Buffers for `model`, with the default [`PassiveParams`].
+    /// Buffers for `model`, with the default [`PassiveParams`] (and this
+    /// thread's RK4 stage buffers sized for it).
     pub fn new(model: &Model) -> StepWorkspace {
         let (nq, nv) = (model.nq, model.nv);
+        Rk4Stages::take(nq, nv).give_back();
         StepWorkspace {
             passive: PassiveParams::default(),
             tau_actuator: vec![0.0; nv],
             tau: vec![0.0; nv],
             q_stage: vec![0.0; nq],
-            q_eval: vec![0.0; nq],
-            v_stage: vec![0.0; nv],
-            dq: std::array::from_fn(|_| vec![0.0; nq]),
-            dv: std::array::from_fn(|_| vec![0.0; nv]),
+            dv0: vec![0.0; nv],
             imposed: None,
             actuators: None,
         }
@@ -275,7 +271,50 @@ impl StepWorkspace {
     /// The acceleration of the first derivative evaluation of the last step,
     /// i.e. `a(q, v)` at the step's start state (nv).
     pub fn last_acceleration(&self) -> &[f64] {
-        &self.dv[0]
+        &self.dv0
+    }
+}
+
+/// RK4's stage buffers but the first acceleration: they hold nothing from
+/// one step to the next, so they are one per thread, not one per robot's
+/// [`StepWorkspace`]; sized to the largest model the thread has stepped
+/// (by [`StepWorkspace::new`] on the thread that makes the workspace).
+#[derive(Debug, Default)]
+struct Rk4Stages {
+    /// Stage velocity (nv).
+    v_stage: Vec<f64>,
+    /// The stage configuration's unit-quaternion copy used for dynamics (nq).
+    q_eval: Vec<f64>,
+    /// Configuration derivatives of the four stages, embedded coordinates (4 × nq).
+    dq: [Vec<f64>; 4],
+    /// Accelerations of stages 2 to 4 (3 × nv; the first is `StepWorkspace::dv0`).
+    dv: [Vec<f64>; 3],
+}
+
+thread_local! {
+    static RK4_STAGES: std::cell::RefCell<Rk4Stages> = std::cell::RefCell::new(Rk4Stages::default());
+}
+
+impl Rk4Stages {
+    /// This thread's buffers, at least `nq` and `nv` long (every entry is
+    /// written before it is read), lent until [`Rk4Stages::give_back`].
+    fn take(nq: usize, nv: usize) -> Rk4Stages {
+        let mut s = RK4_STAGES.with(std::cell::RefCell::take);
+        let fit = |x: &mut Vec<f64>, n: usize| {
+            if x.len() < n {
+                x.resize(n, 0.0);
+            }
+        };
+        fit(&mut s.v_stage, nv);
+        fit(&mut s.q_eval, nq);
+        s.dq.iter_mut().for_each(|x| fit(x, nq));
+        s.dv.iter_mut().for_each(|x| fit(x, nv));
+        s
+    }
+
+    /// Returns the buffers to this thread.
+    fn give_back(self) {
+        RK4_STAGES.with(|cell| drop(cell.replace(self)));
     }
 }
 
@@ -317,12 +356,11 @@ pub fn step<F: ForceModel>(
                 tau_actuator,
                 tau,
                 q_stage,
-                dv,
+                dv0: a,
                 imposed,
                 actuators,
                 ..
             } = ws;
-            let [a, ..] = dv;
             acceleration(
                 model,
                 data,
@@ -360,13 +398,21 @@ fn rk4<F: ForceModel>(
         tau_actuator,
         tau,
         q_stage,
-        q_eval,
-        v_stage,
-        dq,
-        dv,
+        dv0,
         imposed,
         actuators,
     } = ws;
+    let (nq, nv) = (model.nq, model.nv);
+    let mut stages = Rk4Stages::take(nq, nv);
+    let Rk4Stages {
+        v_stage,
+        q_eval,
+        dq,
+        dv: dv_rest,
+    } = &mut stages;
+    let (v_stage, q_eval) = (&mut v_stage[..nv], &mut q_eval[..nq]);
+    let [dv1, dv2, dv3] = dv_rest;
+    let dv: [&mut [f64]; 4] = [dv0, &mut dv1[..nv], &mut dv2[..nv], &mut dv3[..nv]];
     // Stage k is evaluated at y0 + c_k·dt·k_{k−1}, c = (0, ½, ½, 1).
     let c = [0.0, 0.5 * dt_s, 0.5 * dt_s, dt_s];
     for k in 0..4 {
@@ -374,10 +420,10 @@ fn rk4<F: ForceModel>(
             q_stage.copy_from_slice(&state.q);
             v_stage.copy_from_slice(&state.v);
         } else {
-            for i in 0..model.nq {
+            for i in 0..nq {
                 q_stage[i] = state.q[i] + c[k] * dq[k - 1][i];
             }
-            for i in 0..model.nv {
+            for i in 0..nv {
                 v_stage[i] = state.v[i] + c[k] * dv[k - 1][i];
             }
         }
@@ -385,7 +431,7 @@ fn rk4<F: ForceModel>(
         // the unit sphere and equal to the true field on it.
         q_eval.copy_from_slice(q_stage);
         normalize_base_quat(model, q_eval);
-        q_derivative(model, q_eval, v_stage, &mut dq[k]);
+        q_derivative(model, q_eval, v_stage, &mut dq[k][..nq]);
         acceleration(
             model,
             data,
@@ -395,18 +441,19 @@ fn rk4<F: ForceModel>(
             v_stage,
             forces,
             tau,
-            &mut dv[k],
+            dv[k],
             imposed.as_mut().map(|m| (m, c[k])),
             actuators.as_ref(),
         );
     }
     let w = dt_s / 6.0;
-    for i in 0..model.nq {
+    for i in 0..nq {
         state.q[i] += w * (dq[0][i] + 2.0 * dq[1][i] + 2.0 * dq[2][i] + dq[3][i]);
     }
-    for i in 0..model.nv {
+    for i in 0..nv {
         state.v[i] += w * (dv[0][i] + 2.0 * dv[1][i] + 2.0 * dv[2][i] + dv[3][i]);
     }
+    stages.give_back();
     // The exact flow keeps |quat| = 1, so this is an O(dt⁵) correction.
     normalize_base_quat(model, &mut state.q);
 }
@@ -481,7 +528,7 @@ fn acceleration<F: ForceModel>(
 /// outputs) and the known generalised forces `tau` (nv), solves the base
 /// rows of `M a + h = τ + Jᵀ f_ext` for the base acceleration and writes into
 /// the joint rows of `tau` the total joint force that realises `a` (see
-/// [`ImposedJoints`]). Fills `data.mass_matrix`; leaves `data.tau` with
+/// [`ImposedJoints`]). Computes the mass matrix; leaves `data.tau` with
 /// `RNEA(q, v, [0; a_j], f_ext)`.
 ///
 /// # Panics
@@ -498,8 +545,7 @@ pub fn hybrid_acceleration(
     a[..nv0].fill(0.0);
     rnea_from_kinematics(model, data, v, a, true);
     if nv0 == 6 {
-        crba_from_kinematics(model, data);
-        let mm = &data.mass_matrix;
+        let mm = crba_from_kinematics(model, data);
         let mut mbb = [[0.0; 6]; 6];
         let mut rhs = [0.0; 6];
         for k in 0..6 {
@@ -636,6 +682,50 @@ mod tests {
             State::from_parts(&m, q, vec![0.0; 6]),
             Err(StateError::QuaternionNorm { .. })
         ));
+    }
+
+    /// The per-thread buffers (RK4's stages, ABA's and CRBA's workspace, the
+    /// mass matrix) carry nothing from one robot to the next: two models of
+    /// different sizes stepped in turn on one thread get the bits each gets
+    /// alone, with either integrator.
+    #[test]
+    fn robots_stepped_in_turn_get_the_bits_they_get_alone() {
+        let models: Vec<Model> = ["quad16", "quad12"]
+            .iter()
+            .map(|n| {
+                let d = crate::robots::builtin(n).unwrap();
+                Model::from_description(&d, BaseKind::Floating).unwrap()
+            })
+            .collect();
+        let start = |m: &Model| {
+            let mut s = State::neutral(m);
+            for (k, v) in s.v.iter_mut().enumerate() {
+                *v = 0.3 * (k as f64).sin();
+            }
+            s
+        };
+        let run = |order: &[usize], integrator: Integrator| {
+            let mut robots: Vec<_> = models
+                .iter()
+                .map(|m| (Data::new(m), StepWorkspace::new(m), start(m)))
+                .collect();
+            for _ in 0..20 {
+                for &i in order {
+                    let (m, (data, ws, state)) = (&models[i], &mut robots[i]);
+                    let tau: Vec<f64> = (0..m.nv).map(|k| 0.1 * k as f64).collect();
+                    step(m, data, ws, state, &tau, 1e-3, integrator, &mut ());
+                }
+            }
+            robots
+                .iter()
+                .map(|(_, _, s)| s.q.iter().chain(&s.v).map(|x| x.to_bits()).collect())
+                .collect::<Vec<Vec<u64>>>()
+        };
+        for integrator in [Integrator::Rk4, Integrator::SemiImplicitEuler] {
+            let together = run(&[0, 1], integrator);
+            assert_eq!(together[0], run(&[0], integrator)[0], "{integrator:?}");
+            assert_eq!(together[1], run(&[1], integrator)[1], "{integrator:?}");
+        }
     }
 
     /// Integrating a constant twist in n small steps equals one big step: the

@@ -23,7 +23,8 @@ fn joint_transform(jt: JointType, axis: DVec3, qi: f64) -> Transform {
     }
 }
 
-/// Poses only (no velocities): fills `pose`, `s`, `s_base`, `inertia_ref` and sets `origin`.
+/// Poses only (no velocities): fills `pose`, `s`, `s_base`, `inertia_ref`
+/// (not in a kinematics-only [`Data`]) and sets `origin`.
 ///
 /// After this call, [`Data::origin`] is the base origin and every spatial
 /// quantity refers to it.
@@ -87,7 +88,10 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     }
     let step = &model.pose_step[..n];
     let base_rot = Transform::new(base.rot, DVec3::ZERO);
-    data.inertia_ref[0] = rigid_inertia_in(&model.inertia[0], step[0], &base_rot);
+    // (a kinematics-only `Data` has no reference inertias)
+    if let Some(ir) = data.inertia_ref.first_mut() {
+        *ir = rigid_inertia_in(&model.inertia[0], step[0], &base_rot);
+    }
     if let Some(v) = v {
         data.vel[0] = base_velocity(model, data, v);
     }
@@ -106,7 +110,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let (placement, inertia) = (&model.placement[..n], &model.inertia[..n]);
     let pose = &mut data.pose[..n];
     let s_all = &mut data.s[..n];
-    let inertia_ref = &mut data.inertia_ref[..n];
+    let mut inertia_ref = (!data.inertia_ref.is_empty()).then(|| &mut data.inertia_ref[..n]);
     let vel = &mut data.vel[..n];
     for &i in &model.depth_order {
         let p = parent[i];
@@ -149,7 +153,9 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
             _ => Motion::new(aw, DVec3::ZERO),
         };
         s_all[i] = s;
-        inertia_ref[i] = rigid_inertia_in(&inertia[i], st, &Transform::new(x.rot, r));
+        if let Some(ir) = inertia_ref.as_deref_mut() {
+            ir[i] = rigid_inertia_in(&inertia[i], st, &Transform::new(x.rot, r));
+        }
         if let Some(v) = v {
             vel[i] = vel[p] + s * v[idx_v[i]];
         }
@@ -203,10 +209,6 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
             data.vel[0] = base_velocity(model, data, v);
             for i in 1..model.nbodies {
                 data.vel[i] = data.vel[model.parent[i]] + data.s[i] * v[model.idx_v[i]];
-            }
-            #[cfg(target_arch = "x86_64")]
-            if let Some(plan) = &model.leg_lanes {
-                crate::leg_lanes::refresh_velocities(plan, data);
             }
         }
         _ => {

@@ -10,7 +10,7 @@
 //! |---|---|---|
 //! | forward kinematics | [`kinematics`] | `pose`, `vel`, `s`, `inertia_ref` |
 //! | RNEA (inverse dynamics) | [`rnea`] | `tau` |
-//! | CRBA (mass matrix) | [`crba`] | `mass_matrix` |
+//! | CRBA (mass matrix) | [`crba`] | returns it ([`crba::MassMatrix`]) |
 //! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
 //! | ABA (forward dynamics) | [`aba`] | `ddq` |
 //! | kinematics + ABA for 4 robots of one model in SIMD lanes | [`batch`] | `BatchData::ddq` |

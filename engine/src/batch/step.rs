@@ -124,7 +124,7 @@ pub fn step_semi_implicit_batch<T, F: ForceModel, const L: usize>(
         let StepParts {
             data, ws, state, ..
         } = parts(robot);
-        let a = &mut ws.dv[0];
+        let a = &mut ws.dv0;
         bd.ddq_of(k, a);
         data.ddq.copy_from_slice(a);
         for (dst, src) in data.acc.iter_mut().zip(&bd.acc) {

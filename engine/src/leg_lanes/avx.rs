@@ -60,21 +60,53 @@ impl GroupStep {
     }
 }
 
-/// One group's kinematics in lanes, beside the per-body copies in [`Data`]
-/// (ABA reads these instead of gathering from the per-body arrays).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupKin {
-    /// Motion subspace columns, reference frame.
-    s: Motion4,
-    /// Inertias in the reference frame.
-    inertia: Inertia4,
-    /// Spatial velocities, reference frame.
-    vel: Motion4,
+/// One group's motion subspaces, inertias and velocities (reference frame)
+/// in lanes, gathered from the per-body arrays that forward kinematics
+/// filled (kept nowhere else: ABA in lanes gathers them per call).
+#[inline(always)]
+fn group_kinematics(grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+    // element by element from the four bodies, no copies of whole structs
+    let [a, b, c, d] = *grp;
+    let v3 = |p: [&DVec3; LEGS]| {
+        V3::new(
+            F4::from_array([p[0].x, p[1].x, p[2].x, p[3].x]),
+            F4::from_array([p[0].y, p[1].y, p[2].y, p[3].y]),
+            F4::from_array([p[0].z, p[1].z, p[2].z, p[3].z]),
+        )
+    };
+    let motion = |m: &[Motion]| {
+        let (ma, mb, mc, md) = (&m[a], &m[b], &m[c], &m[d]);
+        Motion4::new(
+            v3([&ma.lin, &mb.lin, &mc.lin, &md.lin]),
+            v3([&ma.ang, &mb.ang, &mc.ang, &md.ang]),
+        )
+    };
+    let ir = &data.inertia_ref;
+    let (ia, ib, ic, id) = (&ir[a], &ir[b], &ir[c], &ir[d]);
+    let (ja, jb, jc, jd) = (
+        &ia.inertia_com,
+        &ib.inertia_com,
+        &ic.inertia_com,
+        &id.inertia_com,
+    );
+    let inertia = Inertia4 {
+        mass: F4::from_array([ia.mass, ib.mass, ic.mass, id.mass]),
+        com: v3([&ia.com, &ib.com, &ic.com, &id.com]),
+        inertia_com: M3::from_cols(
+            v3([&ja.x_axis, &jb.x_axis, &jc.x_axis, &jd.x_axis]),
+            v3([&ja.y_axis, &jb.y_axis, &jc.y_axis, &jd.y_axis]),
+            v3([&ja.z_axis, &jb.z_axis, &jc.z_axis, &jd.z_axis]),
+        ),
+    };
+    (motion(&data.s), inertia, motion(&data.vel))
 }
 
-/// What ABA's last pass needs of one group, kept from the inward pass.
+/// What ABA's last pass needs of one group, kept from the inward pass (one
+/// per thread: it holds nothing between calls).
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupAba {
+struct GroupAba {
+    /// Motion subspace columns, reference frame.
+    s: Motion4,
     /// `U = Iᴬ S`.
     u: Force4,
     /// `1 / D`.
@@ -92,17 +124,16 @@ fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
 
 /// The legs' part of forward kinematics (`kinematics::poses`), after the
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
-/// poses, motion subspaces, inertias and velocities of every leg body, in
-/// the per-body arrays and in `data.leg_kin`.
+/// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
+/// velocities of every leg body, in the per-body arrays.
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
     let origin = V3::splat(data.origin);
     let mut xp = Transform4::new(M3::splat(base.rot), V3::splat(base.trans));
     let mut vp = Motion4::splat(data.vel[0]);
-    let ng = plan.groups.len();
-    let kin = &mut data.leg_kin[..ng];
-    for ((grp, st), gk) in plan.groups.iter().zip(&plan.steps).zip(kin.iter_mut()) {
+    let with_inertia = !data.inertia_ref.is_empty();
+    for (grp, st) in plan.groups.iter().zip(&plan.steps) {
         // The joint frame: parent pose ∘ placement, with the same skips.
         let rot_j = if st.rotates {
             xp.rot.mul_mat3(st.placement.rot)
@@ -123,24 +154,26 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         let aw = if st.sign > 0.0 { col } else { col.neg() };
         let r = x.trans.sub(origin);
         let s = Motion4::new(r.cross(aw), aw);
-        let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
-        gk.s = s;
-        gk.inertia = inertia;
         let (xs, ss) = (x.lanes(), s.lanes());
-        let (mass, com, ic) = (
-            inertia.mass.to_array(),
-            inertia.com.lanes(),
-            inertia.inertia_com.lanes(),
-        );
         for k in 0..LEGS {
             let i = grp[k];
             data.pose[i] = xs[k];
             data.s[i] = ss[k];
-            data.inertia_ref[i] = RigidInertia::new(mass[k], com[k], ic[k]);
+        }
+        // (a kinematics-only `Data` has no reference inertias)
+        if with_inertia {
+            let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
+            let (mass, com, ic) = (
+                inertia.mass.to_array(),
+                inertia.com.lanes(),
+                inertia.inertia_com.lanes(),
+            );
+            for k in 0..LEGS {
+                data.inertia_ref[grp[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
+            }
         }
         if let Some(v) = v {
             let vel = vp.add(s.scale(gather(v, &st.idx_v)));
-            gk.vel = vel;
             let vs = vel.lanes();
             for k in 0..LEGS {
                 data.vel[grp[k]] = vs[k];
@@ -148,15 +181,6 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             vp = vel;
         }
         xp = x;
-    }
-}
-
-/// Copies the legs' per-body velocities into `data.leg_kin` (after
-/// forward kinematics' velocity-only update, which writes the per-body ones).
-pub(crate) fn refresh_velocities(plan: &LegLanes, data: &mut Data) {
-    let ng = plan.groups.len();
-    for (grp, gk) in plan.groups.iter().zip(&mut data.leg_kin[..ng]) {
-        gk.vel = Motion4::from_lanes(grp.map(|i| data.vel[i]));
     }
 }
 
@@ -175,8 +199,8 @@ fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6
 
 /// ABA's three passes after forward kinematics, legs in lanes
 /// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
-/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) stays in `data.leg_aba` and
-/// locals instead.
+/// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) is in the thread's per-group
+/// workspace and locals instead.
 #[target_feature(enable = "avx")]
 pub(crate) fn aba_passes_legs(
     model: &Model,
@@ -193,8 +217,9 @@ pub(crate) fn aba_passes_legs(
     let armature = &model.armature[..nv];
     let (v, tau) = (&v[..nv], &tau[..nv]);
     let f_ext = &data.f_ext[..n];
-    let kin = &data.leg_kin[..ng];
-    let work = &mut data.leg_aba[..ng];
+    // ABA's per-group workspace, from pass 2 to pass 3 of this call only.
+    let mut work_all = take_group_aba(ng);
+    let work = &mut work_all[..ng];
     // Pass 1 of the base; its children's terms are added below.
     let (mut ia0, mut pa0) = base_pass1(
         &data.inertia_ref[0],
@@ -209,11 +234,7 @@ pub(crate) fn aba_passes_legs(
     for g in (0..ng).rev() {
         let grp = &groups[g];
         let st = &plan.steps[g];
-        let GroupKin {
-            s,
-            inertia,
-            vel: vi,
-        } = kin[g];
+        let (s, inertia, vi) = group_kinematics(grp, data);
         let mut ia = inertia.to_sym6();
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
@@ -237,6 +258,7 @@ pub(crate) fn aba_passes_legs(
         };
         let pa = pai.add(ia_c).add(u.scale(ut.sub(c.dot(u)).mul(d_inv)));
         work[g] = GroupAba {
+            s,
             u,
             d_inv,
             u_tau: ut,
@@ -279,14 +301,14 @@ pub(crate) fn aba_passes_legs(
     let mut a_parent = Motion4::splat(a0);
     let acc = &mut data.acc[..n];
     let ddq = &mut data.ddq[..nv];
-    for (((grp, st), w), gk) in groups.iter().zip(&plan.steps).zip(work.iter()).zip(kin) {
+    for ((grp, st), w) in groups.iter().zip(&plan.steps).zip(work.iter()) {
         let a = a_parent.add(w.c);
         let qdd = w
             .u_tau
             .sub(w.u.lin.dot(a.lin))
             .sub(w.u.ang.dot(a.ang))
             .mul(w.d_inv);
-        let a_i = a.add(gk.s.scale(qdd));
+        let a_i = a.add(w.s.scale(qdd));
         let (qdds, accs) = (qdd.to_array(), a_i.add(a_grav_l).lanes());
         for k in 0..LEGS {
             ddq[st.idx_v[k]] = qdds[k];
@@ -301,4 +323,26 @@ pub(crate) fn aba_passes_legs(
         let aa = rt * a0_true.ang;
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
+    GROUP_ABA.with(|cell| drop(cell.replace(work_all)));
+}
+
+thread_local! {
+    static GROUP_ABA: std::cell::RefCell<Vec<GroupAba>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// This thread's ABA workspace of `ng` groups (every entry is written by
+/// pass 2 before pass 3 reads it), lent until given back.
+fn take_group_aba(ng: usize) -> Vec<GroupAba> {
+    let mut w = GROUP_ABA.with(std::cell::RefCell::take);
+    if w.len() < ng {
+        w.resize(ng, GroupAba::default());
+    }
+    w
+}
+
+/// Sizes this thread's ABA workspace for `plan` (by `Data::new`, so that
+/// stepping on the thread allocates nothing).
+pub(crate) fn reserve_workspace(plan: &LegLanes) {
+    let w = take_group_aba(plan.groups.len());
+    GROUP_ABA.with(|cell| drop(cell.replace(w)));
 }

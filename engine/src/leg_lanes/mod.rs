@@ -24,9 +24,7 @@ mod avx;
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{
-    GroupAba, GroupKin, GroupStep, aba_passes_legs, poses_legs, refresh_velocities,
-};
+pub(crate) use avx::{GroupStep, aba_passes_legs, poses_legs, reserve_workspace};
 
 use crate::model::{JointType, Model};
 
@@ -93,16 +91,6 @@ impl LegLanes {
         })
     }
 }
-
-/// Placeholders of the lane workspaces in [`crate::Data`] where there are no lanes.
-#[cfg(not(target_arch = "x86_64"))]
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupKin;
-
-/// Placeholders of the lane workspaces in [`crate::Data`] where there are no lanes.
-#[cfg(not(target_arch = "x86_64"))]
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupAba;
 
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
@@ -223,5 +211,45 @@ mod tests {
             outs.push(d.ddq.clone());
         }
         assert_eq!(bits(&outs[0]), bits(&outs[1]));
+    }
+
+    /// A kinematics-only `Data` (no reference inertias) gets the same poses, subspaces and velocities as a full
+    /// one, on the full and the velocity-only path, in lanes and not.
+    #[test]
+    fn kinematics_only_data_gets_the_same_kinematics() {
+        let desc = crate::robots::builtin("quad16").unwrap();
+        let lanes = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        assert!(lanes.leg_lanes.is_some());
+        let mut general = lanes.clone();
+        general.leg_lanes = None;
+        for m in [lanes, general] {
+            kinematics_only_matches(&m);
+        }
+    }
+
+    fn kinematics_only_matches(m: &Model) {
+        let mut q = m.neutral_q();
+        for (k, x) in q[m.base_nq()..].iter_mut().enumerate() {
+            *x = 0.2 * k as f64 - 1.3;
+        }
+        let v0: Vec<f64> = (0..m.nv).map(|k| 0.05 * k as f64 - 0.4).collect();
+        let v1 = vec![0.7; m.nv];
+        let kin = |d: &Data| {
+            let mut all = Vec::new();
+            for i in 0..m.nbodies {
+                all.extend(d.pose[i].rot.to_cols_array());
+                all.extend(d.pose[i].trans.to_array());
+                all.extend(d.vel[i].to_array());
+                all.extend(d.s[i].to_array());
+            }
+            bits(&all)
+        };
+        let (mut full, mut light) = (Data::new(m), Data::for_kinematics(m));
+        assert!(light.inertia_ref.is_empty());
+        for v in [&v0, &v1] {
+            forward_kinematics(m, &mut full, &q, v);
+            forward_kinematics(m, &mut light, &q, v);
+            assert_eq!(kin(&full), kin(&light));
+        }
     }
 }
