@@ -48,11 +48,12 @@ pub fn step_robot_blocks(
     rate: Res<ControlRate>,
     config: Res<SimConfig>,
     batching: Option<Res<LaneBatching>>,
-    layout: Res<StageLayout>,
+    layout: Option<Res<StageLayout>>,
     mut groups: Local<Vec<usize>>,
     mut blocks: Local<Vec<usize>>,
 ) {
-    let StageLayout::RobotBlocks { robots } = *layout else {
+    // a world without the resource runs the default layout
+    let StageLayout::RobotBlocks { robots } = layout.as_deref().copied().unwrap_or_default() else {
         return;
     };
     let t_s = clock.time_s;
