@@ -111,40 +111,24 @@ pub struct ShapeInterner {
 impl ShapeInterner {
     /// A collider for `geometry`: a live one of the same geometry, else a new one.
     pub fn collider(&mut self, geometry: &Geometry) -> Collider {
-        let key = geometry_bits(geometry);
-        let h = hash_bits(&key);
-        let found = self.colliders.get(&h).and_then(|list| {
-            list.iter()
-                .filter_map(Weak::upgrade)
-                .find(|c| geometry_bits(&c.geometry) == key)
-        });
-        if let Some(c) = found {
-            return Collider(c);
+        let (c, added) = intern(
+            &mut self.colliders,
+            geometry,
+            |c| &c.geometry,
+            |g| Collider::new(g).0,
+        );
+        if added {
+            self.note_added();
         }
-        let c = Collider::new(geometry.clone());
-        self.colliders
-            .entry(h)
-            .or_default()
-            .push(Arc::downgrade(&c.0));
-        self.note_added();
-        c
+        Collider(c)
     }
 
     /// A visual for `geometry`: a live one of the same geometry, else a new one.
     pub fn visual(&mut self, geometry: &Geometry) -> Visual {
-        let key = geometry_bits(geometry);
-        let h = hash_bits(&key);
-        let found = self.visuals.get(&h).and_then(|list| {
-            list.iter()
-                .filter_map(Weak::upgrade)
-                .find(|g| geometry_bits(g) == key)
-        });
-        if let Some(g) = found {
-            return Visual(g);
+        let (g, added) = intern(&mut self.visuals, geometry, |g| g, Arc::new);
+        if added {
+            self.note_added();
         }
-        let g = Arc::new(geometry.clone());
-        self.visuals.entry(h).or_default().push(Arc::downgrade(&g));
-        self.note_added();
         Visual(g)
     }
 
@@ -152,17 +136,42 @@ impl ShapeInterner {
     fn note_added(&mut self) {
         self.added += 1;
         if self.added > self.colliders.len() + self.visuals.len() {
-            self.colliders.retain(|_, l| {
-                l.retain(|w| w.strong_count() > 0);
-                !l.is_empty()
-            });
-            self.visuals.retain(|_, l| {
-                l.retain(|w| w.strong_count() > 0);
-                !l.is_empty()
-            });
+            drop_dead(&mut self.colliders);
+            drop_dead(&mut self.visuals);
             self.added = 0;
         }
     }
+}
+
+/// The live entry of `table` whose geometry (`geometry_of`) has the bits of
+/// `geometry`, else a new one (`make`) entered there; and whether it is new.
+fn intern<T>(
+    table: &mut HashMap<u64, Vec<Weak<T>>>,
+    geometry: &Geometry,
+    geometry_of: impl Fn(&T) -> &Geometry,
+    make: impl FnOnce(Geometry) -> Arc<T>,
+) -> (Arc<T>, bool) {
+    let key = geometry_bits(geometry);
+    let h = hash_bits(&key);
+    let found = table.get(&h).and_then(|list| {
+        list.iter()
+            .filter_map(Weak::upgrade)
+            .find(|t| geometry_bits(geometry_of(t)) == key)
+    });
+    if let Some(t) = found {
+        return (t, false);
+    }
+    let t = make(geometry.clone());
+    table.entry(h).or_default().push(Arc::downgrade(&t));
+    (t, true)
+}
+
+/// Forgets `table`'s entries whose shapes no entity uses any more.
+fn drop_dead<T>(table: &mut HashMap<u64, Vec<Weak<T>>>) {
+    table.retain(|_, l| {
+        l.retain(|w| w.strong_count() > 0);
+        !l.is_empty()
+    });
 }
 
 /// Every number of a geometry as its bits (and the mesh URI's bytes), so that
