@@ -87,19 +87,21 @@ impl Run {
             stderr: Some(stderr),
         };
         if heard.recv_timeout(Duration::from_secs(60)).is_err() {
-            let text = run.stop();
+            let (text, _) = run.stop();
             panic!("the run never announced world '{world}'; its stderr:\n{text}");
         }
         run
     }
 
-    /// Ends the run (SIGTERM: it closes its log) and returns its stderr.
-    fn stop(&mut self) -> String {
-        let _ = Command::new("kill")
+    /// Ends the run (SIGTERM: it closes its log) and returns its stderr, and
+    /// whether the run was still there to be signalled.
+    fn stop(&mut self) -> (String, bool) {
+        let signalled = Command::new("kill")
             .arg("-TERM")
             .arg(self.child.id().to_string())
-            .status();
-        self.finish().1
+            .status()
+            .is_ok_and(|s| s.success());
+        (self.finish().1, signalled)
     }
 
     /// Waits for the run to end: its exit status and stderr.
@@ -130,7 +132,7 @@ fn python_external_controller_makes_quad16_stand_in_lockstep() {
     );
     let py = python("stand_external.py", &[&world]).output().unwrap();
     if !py.status.success() {
-        let text = run.stop();
+        let (text, _) = run.stop();
         panic!(
             "python: {}\nthe run's stderr:\n{text}",
             String::from_utf8_lossy(&py.stderr)
@@ -169,7 +171,8 @@ fn python_reader_prints_the_logs_com() {
         &out,
     );
     let py = python("monitor_com.py", &[&world, "50"]).output().unwrap();
-    let text = run.stop();
+    let (text, signalled) = run.stop();
+    assert!(signalled, "the run ended before Python did:\n{text}");
     assert!(
         py.status.success(),
         "python: {}\nthe run's stderr:\n{text}",
