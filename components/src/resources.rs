@@ -69,7 +69,7 @@ pub const PARALLEL_MIN_ITEMS: usize = 4;
 /// world (and each test) can have its own size.
 #[derive(Resource, Debug)]
 pub struct SimThreadPool {
-    pool: rayon::ThreadPool,
+    pool: std::sync::Arc<rayon::ThreadPool>,
 }
 
 impl SimThreadPool {
@@ -79,7 +79,9 @@ impl SimThreadPool {
             .num_threads(threads)
             .thread_name(|i| format!("quadsim-sim-{i}"))
             .build()
-            .map(|pool| Self { pool })
+            .map(|pool| Self {
+                pool: std::sync::Arc::new(pool),
+            })
             .map_err(|source| ThreadPoolError { threads, source })
     }
 
@@ -128,6 +130,14 @@ impl SimThreadPool {
         } else {
             self.pool.install(|| split_groups(items, 0, ends, &f));
         }
+    }
+
+    /// The pool itself, shared: a caller that runs many steps runs them all
+    /// inside it ([`rayon::ThreadPool::install`]), so the step's parallel
+    /// passes start on a worker instead of waking the pool from outside and
+    /// waiting to be woken back, twice per pass.
+    pub fn shared(&self) -> std::sync::Arc<rayon::ThreadPool> {
+        std::sync::Arc::clone(&self.pool)
     }
 
     /// Runs `f` inside the pool, so rayon's parallel iterators in it use these workers.

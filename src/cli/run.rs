@@ -520,27 +520,39 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     let chunk = (world.steps / 200).max(1);
     let mut done = 0;
     let mut outcome = crate::log::RunOutcome::default();
-    'run: while done < world.steps {
+    // The steps run inside the thread pool (see `SimThreadPool::shared`).
+    let pool = world
+        .sim
+        .world
+        .resource::<quadsim_components::SimThreadPool>()
+        .shared();
+    while done < world.steps {
         let n = chunk.min(world.steps - done);
-        for _ in 0..n {
-            if let Some(c) = &mut commands
-                && let Err(e) = c.before_step(&mut world, monitor.as_ref())
-            {
-                command_error = Some(e.to_string());
-                break 'run;
+        let stop = pool.install(|| {
+            for _ in 0..n {
+                if let Some(c) = &mut commands
+                    && let Err(e) = c.before_step(&mut world, monitor.as_ref())
+                {
+                    command_error = Some(e.to_string());
+                    return true;
+                }
+                world.sim.step();
+                done += 1;
+                if let Err(e) = check_finite(&world) {
+                    outcome.diverged = Some(e.to_string());
+                    return true;
+                }
+                if crate::log::interrupt::requested() {
+                    outcome.interrupted = true;
+                    return true;
+                }
             }
-            world.sim.step();
-            done += 1;
-            if let Err(e) = check_finite(&world) {
-                outcome.diverged = Some(e.to_string());
-                break 'run;
-            }
-            if crate::log::interrupt::requested() {
-                outcome.interrupted = true;
-                break 'run;
-            }
-        }
+            false
+        });
         bar.set_position(done);
+        if stop {
+            break;
+        }
     }
     bar.finish_and_clear();
     crate::log::interrupt::clear();

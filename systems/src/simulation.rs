@@ -114,9 +114,12 @@ impl Simulation {
 
     /// Runs `steps` fixed steps.
     pub fn run(&mut self, steps: u64) {
-        for _ in 0..steps {
-            self.step();
-        }
+        let pool = self.world.resource::<SimThreadPool>().shared();
+        pool.install(|| {
+            for _ in 0..steps {
+                self.step();
+            }
+        });
     }
 
     /// The step schedule, to add systems to the [`crate::SimSystems`] sets.
