@@ -65,3 +65,51 @@ fn bench_reports_throughput_and_memory_per_robot() {
     assert!(String::from_utf8_lossy(&e.stderr).contains("quad99"));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `--sim-seconds` times that much simulated time per block (0.01 s: 20
+/// steps of 0.5 ms), and refuses less than one step.
+#[test]
+fn bench_sim_seconds_sets_the_timed_steps() {
+    let dir = std::env::temp_dir().join(format!("quadsim-bench-s-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("bench.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_quadsim"))
+        .args([
+            "bench",
+            "--robots",
+            "1",
+            "--threads",
+            "1",
+            "--sim-seconds",
+            "0.01",
+            "--repeats",
+            "1",
+            "--warmup",
+            "1",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["steps_per_block"], 20, "{v}");
+    for bad in [["--sim-seconds", "0"], ["--sim-seconds", "NaN"]] {
+        let e = Command::new(env!("CARGO_BIN_EXE_quadsim"))
+            .args(["bench", "--robots", "1"])
+            .args(bad)
+            .output()
+            .unwrap();
+        assert!(!e.status.success(), "{bad:?}");
+        assert!(
+            String::from_utf8_lossy(&e.stderr).contains("--sim-seconds"),
+            "{}",
+            String::from_utf8_lossy(&e.stderr)
+        );
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -31,6 +31,10 @@ pub struct BenchArgs {
     /// Timed steps per block (0.5 ms each).
     #[arg(long, default_value_t = 400)]
     pub steps: u64,
+    /// Timed simulated time per block (s), instead of `--steps`: 0.2 is
+    /// 400 steps of 0.5 ms.
+    #[arg(long, conflicts_with = "steps")]
+    pub sim_seconds: Option<f64>,
     /// Timed blocks per configuration; the median is reported.
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
@@ -168,8 +172,19 @@ pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoin
     })
 }
 
+/// The benchmark's step (s).
+pub const BENCH_DT_S: f64 = 0.0005;
+
 /// Runs `quadsim bench`.
-pub fn run(a: BenchArgs) -> Result<(), CliError> {
+pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
+    if let Some(s) = a.sim_seconds {
+        if !(s.is_finite() && s >= BENCH_DT_S) {
+            return Err(bad(format!(
+                "--sim-seconds {s}: expected at least one step, {BENCH_DT_S} s"
+            )));
+        }
+        a.steps = (s / BENCH_DT_S).round() as u64;
+    }
     if a.steps == 0 || a.robots.contains(&0) {
         return Err(bad("--steps and every --robots count must be at least 1"));
     }
@@ -213,7 +228,7 @@ pub fn run(a: BenchArgs) -> Result<(), CliError> {
             .iter()
             .find(|q| q.robots == p.robots && q.threads == 1)
             .map(|q| q.block_wall_s / p.block_wall_s);
-        let rt = p.steps as f64 * 0.0005 / p.block_wall_s;
+        let rt = p.steps as f64 * BENCH_DT_S / p.block_wall_s;
         println!(
             "{:>7} {:>7} {:>16.0} {:>14.3} {:>12.2} {:>10} {:>14}",
             p.robots,
