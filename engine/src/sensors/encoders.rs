@@ -108,21 +108,21 @@ impl Encoders {
         let Some(dt) = self.gate.tick(t_s) else {
             return false;
         };
+        // the velocity filter's coefficient, the same for every joint
+        let alpha = match self.params.velocity {
+            JointVelocityMode::Differencing {
+                filter_time_constant_s,
+            } if filter_time_constant_s > 0.0 => 1.0 - (-dt / filter_time_constant_s).exp(),
+            _ => 1.0,
+        };
         for (j, ch) in self.channels.iter_mut().enumerate() {
             let theta = ch.sample(q_rad[j], dt, &mut self.rng);
             let n = gaussian(&mut self.rng);
             let w = match self.params.velocity {
                 JointVelocityMode::Direct { noise_std_radps } => qd_radps[j] + noise_std_radps * n,
-                JointVelocityMode::Differencing {
-                    filter_time_constant_s,
-                } => {
+                JointVelocityMode::Differencing { .. } => {
                     if self.sampled && dt > 0.0 {
                         let raw = (theta - self.position_rad[j]) / dt;
-                        let alpha = if filter_time_constant_s > 0.0 {
-                            1.0 - (-dt / filter_time_constant_s).exp()
-                        } else {
-                            1.0
-                        };
                         self.velocity_radps[j] + alpha * (raw - self.velocity_radps[j])
                     } else {
                         0.0
