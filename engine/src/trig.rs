@@ -151,9 +151,13 @@ fn select(m: f64, a: f64, b: f64) -> f64 {
 /// Sine and cosine of each lane, bit for bit [`libm::sincos`] of that lane
 /// (see [the module doc](self)): msun's `sincos` without branches for
 /// |x| < 2²⁰·π/2 where it needs no second reduction round, [`libm::sincos`]
-/// itself for the other lanes. Inlined into its caller's SIMD code: with
-/// `L` = 4 in an AVX2 function it runs as `f64x4` instructions plus, only for
-/// the rare lanes that need it, scalar calls.
+/// itself for the other lanes. Inlined into its caller: in an AVX2 function
+/// LLVM turns the arithmetic into `f64x4` instructions but leaves parts of the
+/// lane-mask logic scalar, so [`sin_cos_x4`] and the legs' lanes run the same
+/// operations as AVX intrinsics instead (`leg_lanes`' `F4::sin_cos`, 134
+/// instructions for four angles; glibc's `sincos` takes ~110 for one). This
+/// plain-Rust form serves the robot-lanes batch, the generic build and, with
+/// `L` = 1, as the reference the tests hold every path to.
 #[inline(always)]
 pub fn sin_cos_lanes<const L: usize>(x: [f64; L]) -> ([f64; L], [f64; L]) {
     let ax = map(x, f64::abs);
