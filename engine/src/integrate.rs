@@ -617,7 +617,7 @@ pub fn integrate_q(model: &Model, q: &[f64], v: &[f64], dt_s: f64, q_out: &mut [
         let pxr = phi.cross(rho);
         let dp = rho + pxr * a + phi.cross(pxr) * b;
         let p = DVec3::new(q[0], q[1], q[2]) + quat * dp;
-        let quat_new = (quat * DQuat::from_scaled_axis(phi)).normalize();
+        let quat_new = (quat * quat_from_scaled_axis(phi)).normalize();
         q_out[..7].copy_from_slice(&[
             p.x, p.y, p.z, quat_new.x, quat_new.y, quat_new.z, quat_new.w,
         ]);
@@ -625,6 +625,20 @@ pub fn integrate_q(model: &Model, q: &[f64], v: &[f64], dt_s: f64, q_out: &mut [
     for (k, qo) in q_out[bq..].iter_mut().enumerate() {
         *qo = q[bq + k] + v[bv + k] * dt_s;
     }
+}
+
+/// glam's `DQuat::from_scaled_axis` (rotation by `|φ|` rad about `φ/|φ|`)
+/// with `trig::kinematics_sin_cos` ([`crate::trig::DYNAMICS_USE_LIBM`]),
+/// operation for operation.
+#[inline]
+fn quat_from_scaled_axis(phi: DVec3) -> DQuat {
+    let length = phi.length();
+    if length == 0.0 {
+        return DQuat::IDENTITY;
+    }
+    let (s, c) = crate::trig::kinematics_sin_cos(length * 0.5);
+    let v = (phi / length) * s;
+    DQuat::from_xyzw(v.x, v.y, v.z, c)
 }
 
 /// Renormalises the base quaternion `q[3..7]` of a floating base in place.

@@ -17,7 +17,9 @@ pub fn base_quat(q: &[f64]) -> DQuat {
 #[inline]
 fn joint_transform(jt: JointType, axis: DVec3, qi: f64) -> Transform {
     match jt {
-        JointType::Revolute => Transform::new(DMat3::from_axis_angle(axis, qi), DVec3::ZERO),
+        JointType::Revolute => {
+            Transform::new(crate::trig::mat3_from_axis_angle(axis, qi), DVec3::ZERO)
+        }
         JointType::Prismatic => Transform::from_translation(axis * qi),
         JointType::Free | JointType::Anchored => Transform::IDENTITY,
     }
@@ -185,7 +187,7 @@ fn rigid_inertia_in(inertia: &RigidInertia, step: PoseStep, x: &Transform) -> Ri
 /// One arm per axis, so that no column is picked by a run-time index.
 #[inline(always)]
 fn rotate_about_axis(rot: DMat3, k: usize, angle: f64) -> DMat3 {
-    let (s, c) = angle.sin_cos();
+    let (s, c) = crate::trig::kinematics_sin_cos(angle);
     let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
     match k {
         0 => DMat3::from_cols(x, y * c + z * s, z * c - y * s),

@@ -18,6 +18,7 @@
 //! | point Jacobians | [`jacobian`] | `jacobian` |
 //! | CoM, momentum | [`com`] | (returns) |
 //! | energies | [`energy`] | (returns) |
+//! | sine and cosine of joint angles, one value or four in SIMD lanes (libm's bits) | [`trig`] | (returns) |
 
 pub mod aba;
 pub mod actuator_model;
@@ -49,6 +50,7 @@ pub mod sensors;
 pub mod spatial;
 pub mod support;
 pub mod terrain;
+pub mod trig;
 
 pub use data::Data;
 pub use model::{BaseKind, Model, ModelError};

@@ -51,7 +51,7 @@ fn base_rotation<const L: usize>(q: &[Lanes<L>]) -> LMat3<L> {
     )
 }
 
-/// glam's `DMat3::from_axis_angle(axis, angle)` with one angle per lane.
+/// [`crate::trig::mat3_from_axis_angle`] (glam's `DMat3::from_axis_angle`) with one angle per lane.
 #[inline(always)]
 fn axis_angle<const L: usize>(axis: DVec3, angle: Lanes<L>) -> LMat3<L> {
     let (sin, cos) = angle.sin_cos();

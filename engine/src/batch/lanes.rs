@@ -42,13 +42,11 @@ impl<const L: usize> Lanes<L> {
         Self(out)
     }
 
-    /// Sine and cosine per lane, by the same `f64::sin_cos` call as the scalar path.
+    /// Sine and cosine per lane, bit for bit the scalar kinematics' of each
+    /// lane (`trig::kinematics_sin_cos`).
     #[inline(always)]
     pub fn sin_cos(self) -> (Self, Self) {
-        let (mut s, mut c) = ([0.0; L], [0.0; L]);
-        for k in 0..L {
-            (s[k], c[k]) = self.0[k].sin_cos();
-        }
+        let (s, c) = crate::trig::kinematics_sin_cos_lanes(self.0);
         (Self(s), Self(c))
     }
 }

@@ -10,7 +10,7 @@
 //!
 //! **Bit-identical to the scalar path.** Each lane repeats the scalar
 //! algorithm's arithmetic operation for operation (glam's formulas, the same
-//! sums in the same order, no fused multiply–add, `f64::sin_cos` per lane,
+//! sums in the same order, no fused multiply–add, the scalar kinematics' sine and cosine per lane,
 //! and the floating base's 6×6 solve by the scalar [`Sym6::solve`](crate::spatial::Sym6::solve)
 //! per lane), so every robot's `ddq` equals what [`crate::aba::aba`] returns
 //! for it, bit for bit, on any build: the tests in this module check it on

@@ -133,7 +133,17 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let mut xp = Transform4::new(M3::splat(base.rot), V3::splat(base.trans));
     let mut vp = Motion4::splat(data.vel[0]);
     let with_inertia = !data.inertia_ref.is_empty();
+    // The per-body arrays as slices of one known length, and each group's
+    // four bodies checked against it once: the stores below then index
+    // without bounds checks (16 per group before).
+    let n = data.pose.len();
+    let pose = &mut data.pose[..n];
+    let s_all = &mut data.s[..n];
+    let vel = &mut data.vel[..n];
+    let mut inertia_ref = with_inertia.then(|| &mut data.inertia_ref[..n]);
     for (grp, st) in plan.groups.iter().zip(&plan.steps) {
+        let bodies = *grp;
+        assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
         // The joint frame: parent pose ∘ placement, with the same skips.
         let rot_j = if st.rotates {
             xp.rot.mul_mat3(st.placement.rot)
@@ -156,12 +166,12 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         let s = Motion4::new(r.cross(aw), aw);
         let (xs, ss) = (x.lanes(), s.lanes());
         for k in 0..LEGS {
-            let i = grp[k];
-            data.pose[i] = xs[k];
-            data.s[i] = ss[k];
+            let i = bodies[k];
+            pose[i] = xs[k];
+            s_all[i] = ss[k];
         }
         // (a kinematics-only `Data` has no reference inertias)
-        if with_inertia {
+        if let Some(ir) = inertia_ref.as_deref_mut() {
             let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
             let (mass, com, ic) = (
                 inertia.mass.to_array(),
@@ -169,16 +179,16 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
                 inertia.inertia_com.lanes(),
             );
             for k in 0..LEGS {
-                data.inertia_ref[grp[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
+                ir[bodies[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
             }
         }
         if let Some(v) = v {
-            let vel = vp.add(s.scale(gather(v, &st.idx_v)));
-            let vs = vel.lanes();
+            let vel_g = vp.add(s.scale(gather(v, &st.idx_v)));
+            let vs = vel_g.lanes();
             for k in 0..LEGS {
-                data.vel[grp[k]] = vs[k];
+                vel[bodies[k]] = vs[k];
             }
-            vp = vel;
+            vp = vel_g;
         }
         xp = x;
     }

@@ -8,7 +8,7 @@
 //! are independent, so one AVX instruction can do the same operation for all
 //! four. The lane types (`x4`) repeat the scalar formulas operation for
 //! operation (same products, same order of sums, the same additions of exact
-//! zeros, no fused multiply–add), each lane calls the same `f64::sin_cos`, and
+//! zeros, no fused multiply–add), each lane gets the bits of the scalar kinematics' sine and cosine, and
 //! the base receives its children's terms in the scalar order (decreasing body
 //! index): every output is **bit-identical** to the general path of
 //! [`crate::kinematics`] and [`crate::aba`] (tests below and
@@ -27,6 +27,15 @@ mod x4;
 pub(crate) use avx::{GroupStep, aba_passes_legs, poses_legs, reserve_workspace};
 
 use crate::model::{JointType, Model};
+
+/// [`crate::trig::sin_cos_x4`] on AVX: four sines and cosines in one register.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+#[target_feature(enable = "avx")]
+pub(crate) fn sin_cos_avx(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
+    let (s, c) = x4::F4::from_array(x).sin_cos();
+    (s.to_array(), c.to_array())
+}
 
 /// Legs per group: four f64 lanes fill one AVX register.
 pub const LEGS: usize = 4;
@@ -184,6 +193,47 @@ mod tests {
                     bits(&outs[0]),
                     bits(&outs[1]),
                     "{name} {base:?} trial {trial}"
+                );
+            }
+        }
+    }
+
+    /// The AVX lanes' sine and cosine, where this CPU runs them.
+    #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+    fn f4_sin_cos(x: [f64; 4]) -> Option<([f64; 4], [f64; 4])> {
+        multiversion::target::match_target! {
+            "x86_64+avx2+fma" => {
+                let (s, c) = super::x4::F4::from_array(x).sin_cos();
+                Some((s.to_array(), c.to_array()))
+            },
+            _ => {
+                let _ = x;
+                None
+            },
+        }
+    }
+
+    /// `F4::sin_cos` (the legs' lanes) gives `libm::sincos`'s bits in every
+    /// lane, as `trig::sin_cos_lanes` does, on the trig tests' dense and hard
+    /// sample.
+    #[test]
+    fn avx_sin_cos_gives_libm_bits() {
+        if f4_sin_cos([0.0; 4]).is_none() {
+            return; // no AVX2 on this CPU: the lanes never run
+        }
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        for x in crate::trig::tests::sample().chunks_exact(4) {
+            let x = [x[0], x[1], x[2], x[3]];
+            let (s, c) = f4_sin_cos(x).unwrap();
+            for k in 0..4 {
+                let (ls, lc) = libm::sincos(x[k]);
+                assert!(
+                    same(s[k], ls) && same(c[k], lc),
+                    "x = {:e} ({:#x}): lanes ({:e}, {:e}), libm ({ls:e}, {lc:e})",
+                    x[k],
+                    x[k].to_bits(),
+                    s[k],
+                    c[k]
                 );
             }
         }

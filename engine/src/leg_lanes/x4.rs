@@ -11,8 +11,9 @@
 
 use crate::spatial::{Force, Motion, Sym6, Transform};
 use core::arch::x86_64::{
-    __m256d, _mm256_add_pd, _mm256_div_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_sub_pd,
-    _mm256_xor_pd,
+    __m256d, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _CMP_NLT_UQ,
+    _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
+    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_sub_pd, _mm256_xor_pd,
 };
 use glam::{DMat3, DVec3};
 
@@ -82,18 +83,127 @@ impl F4 {
         F4(_mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)))
     }
 
-    /// Sine and cosine per lane by the scalar path's `f64::sin_cos`.
-    #[inline(always)]
+    /// The bitwise AND of the lanes' bit patterns.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn and(self, o: Self) -> Self {
+        F4(_mm256_and_pd(self.0, o.0))
+    }
+
+    /// The bitwise OR of the lanes' bit patterns.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn or(self, o: Self) -> Self {
+        F4(_mm256_or_pd(self.0, o.0))
+    }
+
+    /// The bitwise XOR of the lanes' bit patterns.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn xor(self, o: Self) -> Self {
+        F4(_mm256_xor_pd(self.0, o.0))
+    }
+
+    /// A lane mask (all bits set where true) of the comparison `self P o`.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn cmp<const P: i32>(self, o: Self) -> Self {
+        F4(_mm256_cmp_pd::<P>(self.0, o.0))
+    }
+
+    /// `mask ? a : b` per lane (`mask` from [`Self::cmp`]).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn select(mask: Self, a: Self, b: Self) -> Self {
+        F4(_mm256_blendv_pd(b.0, a.0, mask.0))
+    }
+
+    /// The same bit pattern in every lane.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn bits(b: u64) -> Self {
+        F4::splat(f64::from_bits(b))
+    }
+
+    /// Sine and cosine per lane, bit for bit [`crate::trig::sin_cos`] (libm's
+    /// `sincos`): [`crate::trig::sin_cos_lanes`]' operations, each one AVX
+    /// instruction (that function's plain-Rust lane loops do not all
+    /// vectorise); lanes that need libm's second reduction round or large
+    /// argument path call it.
+    #[inline]
+    #[target_feature(enable = "avx")]
     pub fn sin_cos(self) -> (Self, Self) {
-        let a = self.to_array();
-        let (s0, c0) = a[0].sin_cos();
-        let (s1, c1) = a[1].sin_cos();
-        let (s2, c2) = a[2].sin_cos();
-        let (s3, c3) = a[3].sin_cos();
-        (
-            F4::from_array([s0, s1, s2, s3]),
-            F4::from_array([c0, c1, c2, c3]),
-        )
+        use crate::trig::*;
+        let sp = F4::splat;
+        let x = self;
+        let sign = F4::bits(1 << 63);
+        let ax = x.and(F4::bits(!(1 << 63)));
+        let one = sp(1.0);
+        let gt = |c: f64| ax.cmp::<_CMP_GT_OQ>(sp(c));
+        // n as msun picks it (see `trig::sin_cos_lanes`)
+        let n_thresholds = gt(PIO4)
+            .and(one)
+            .add(gt(PIO4_3).and(one))
+            .add(gt(PIO4_5).and(one))
+            .add(gt(PIO4_7).and(one))
+            .or(x.and(sign));
+        let n_rounded = x.mul(sp(INV_PIO2)).add(sp(TO_INT)).sub(sp(TO_INT));
+        let f_n = F4::select(ax.cmp::<_CMP_LE_OQ>(sp(PIO4_9)), n_thresholds, n_rounded);
+        let r = x.sub(f_n.mul(sp(PIO2_1)));
+        let w = f_n.mul(sp(PIO2_1T));
+        let y0 = r.sub(w);
+        let y1 = r.sub(y0).sub(w);
+        // lanes for libm itself
+        let hi = x.and(F4::bits(0x7fff_ffff_0000_0000));
+        let eq = |c: f64| hi.cmp::<_CMP_EQ_OQ>(sp(c));
+        let near_multiple = eq(HI_PIO2).or(eq(HI_PI)).or(eq(HI_3PIO2).or(eq(HI_2PI)));
+        let pow2 = x.and(F4::bits(0x7ff0_0000_0000_0000));
+        let lost = y0
+            .and(F4::bits(!(1 << 63)))
+            .cmp::<_CMP_LT_OQ>(pow2.mul(sp(TWO_M16)));
+        let refined = lost.and(gt(PIO4)).and(gt(PIO4_9).or(near_multiple));
+        let fallback = ax.cmp::<_CMP_NLT_UQ>(sp(MEDIUM_END)).or(refined);
+        // kernels
+        let z = y0.mul(y0);
+        let zz = z.mul(z);
+        let rs = sp(S2)
+            .add(z.mul(sp(S3).add(z.mul(sp(S4)))))
+            .add(z.mul(zz).mul(sp(S5).add(z.mul(sp(S6)))));
+        let v = z.mul(y0);
+        let sin_iy0 = y0.add(v.mul(sp(S1).add(z.mul(rs))));
+        let t = z.mul(sp(0.5).mul(y1).sub(v.mul(rs))).sub(y1);
+        let sin_iy1 = y0.sub(t.sub(v.mul(sp(S1))));
+        let sin_r = F4::select(ax.cmp::<_CMP_LE_OQ>(sp(PIO4)), sin_iy0, sin_iy1);
+        let rc = z
+            .mul(sp(C1).add(z.mul(sp(C2).add(z.mul(sp(C3))))))
+            .add(zz.mul(zz).mul(sp(C4).add(z.mul(sp(C5).add(z.mul(sp(C6)))))));
+        let hz = sp(0.5).mul(z);
+        let wc = one.sub(hz);
+        let tail = z.mul(rc).sub(y0.mul(y1));
+        let cos_r = wc.add(one.sub(wc).sub(hz).add(tail));
+        // quadrant from the low bits of n + 1.5·2⁵² and n + 1 + 1.5·2⁵²
+        let zero = sp(0.0);
+        let qa = f_n.add(sp(TO_INT));
+        let qb = f_n.add(one).add(sp(TO_INT));
+        let odd = qa.and(F4::bits(1)).cmp::<_CMP_NEQ_OQ>(zero);
+        let neg_s = qa.and(F4::bits(2)).cmp::<_CMP_NEQ_OQ>(zero).and(sign);
+        let neg_c = qb.and(F4::bits(2)).cmp::<_CMP_NEQ_OQ>(zero).and(sign);
+        let s = F4::select(odd, cos_r, sin_r).xor(neg_s);
+        let c = F4::select(odd, sin_r, cos_r).xor(neg_c);
+        let tiny = ax.cmp::<_CMP_LT_OQ>(sp(TINY));
+        let s = F4::select(tiny, x, s);
+        let c = F4::select(tiny, one, c);
+        if _mm256_movemask_pd(fallback.0) == 0 {
+            return (s, c);
+        }
+        let (xa, fb) = (x.to_array(), _mm256_movemask_pd(fallback.0));
+        let (mut sa, mut ca) = (s.to_array(), c.to_array());
+        for k in 0..4 {
+            if fb & (1 << k) != 0 {
+                (sa[k], ca[k]) = libm::sincos(xa[k]);
+            }
+        }
+        (F4::from_array(sa), F4::from_array(ca))
     }
 }
 
@@ -607,7 +717,13 @@ impl Sym6x4 {
 #[inline]
 #[target_feature(enable = "avx")]
 pub fn rotate_about_axis(rot: M3, k: usize, angle: F4) -> M3 {
-    let (s, c) = angle.sin_cos();
+    // `trig::kinematics_sin_cos` per lane
+    let (s, c) = if crate::trig::DYNAMICS_USE_LIBM {
+        angle.sin_cos()
+    } else {
+        let (s, c) = crate::trig::kinematics_sin_cos_lanes(angle.to_array());
+        (F4::from_array(s), F4::from_array(c))
+    };
     let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
     match k {
         0 => M3::from_cols(x, y.scale(c).add(z.scale(s)), z.scale(c).sub(y.scale(s))),

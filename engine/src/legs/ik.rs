@@ -137,10 +137,50 @@ pub struct IkClamped<const N: usize> {
     pub clamped: bool,
 }
 
-/// `e^{iθ}`.
+/// `e^{iθ}` (glam's `DVec2::from_angle`, by [`crate::trig::sin_cos`] or,
+/// with [`crate::trig::LEGS_USE_LIBM`] off, std's).
 #[inline]
 pub(crate) fn cis(theta: f64) -> DVec2 {
-    DVec2::from_angle(theta)
+    let (s, c) = if crate::trig::LEGS_USE_LIBM {
+        crate::trig::sin_cos(theta)
+    } else {
+        theta.sin_cos()
+    };
+    DVec2::new(c, s)
+}
+
+/// `e^{iθ}` of four angles at once ([`crate::trig::sin_cos_x4`]; the same
+/// bits as [`cis`] of each).
+#[inline]
+pub(crate) fn cis4(theta: [f64; 4]) -> [DVec2; 4] {
+    if crate::trig::LEGS_USE_LIBM {
+        let (s, c) = crate::trig::sin_cos_x4(theta);
+        [0, 1, 2, 3].map(|k| DVec2::new(c[k], s[k]))
+    } else {
+        theta.map(cis)
+    }
+}
+
+/// The rotation about `+x` by the angle whose `e^{iθ}` is `cs` (glam's
+/// `DMat3::from_rotation_x`).
+#[inline]
+pub(crate) fn rotation_x(cs: DVec2) -> DMat3 {
+    DMat3::from_cols(
+        DVec3::X,
+        DVec3::new(0.0, cs.x, cs.y),
+        DVec3::new(0.0, -cs.y, cs.x),
+    )
+}
+
+/// The rotation about `+z` by the angle whose `e^{iθ}` is `cs` (glam's
+/// `DMat3::from_rotation_z`).
+#[inline]
+pub(crate) fn rotation_z(cs: DVec2) -> DMat3 {
+    DMat3::from_cols(
+        DVec3::new(cs.x, cs.y, 0.0),
+        DVec3::new(-cs.y, cs.x, 0.0),
+        DVec3::Z,
+    )
 }
 
 /// Complex product.

@@ -25,7 +25,8 @@
 //! `docs/study_b_kinematics.md` compares this with the study's printed inverse.
 
 use super::ik::{
-    IkClamped, IkError, IkOptions, cis, cmul, dls_solve, knee_bend, planar, two_link, wrap_angle,
+    IkClamped, IkError, IkOptions, cis4, cmul, dls_solve, knee_bend, planar, rotation_z, two_link,
+    wrap_angle,
 };
 use super::{LegError, chain_of, foot_point_in_body};
 use crate::model::Model;
@@ -121,10 +122,10 @@ impl Quad12Leg {
     /// Foot point in the base frame (m) at joint angles `a` (rad).
     pub fn fk(&self, a: [f64; 3]) -> DVec3 {
         let [w1, w2, w3] = self.links;
-        let w = w1 + cmul(cis(a[1]), w2 + cmul(cis(a[2]), w3));
+        let [e0, e1, e2, _] = cis4([a[0], a[1], a[2], 0.0]);
+        let w = w1 + cmul(e1, w2 + cmul(e2, w3));
         let hip = DVec3::new(w.y, self.offset_m, w.x);
-        self.mount
-            .transform_point(DMat3::from_rotation_z(a[0]) * hip)
+        self.mount.transform_point(rotation_z(e0) * hip)
     }
 
     /// Knee bend (rad): the signed angle from the thigh to the shank (knee →
@@ -198,11 +199,12 @@ impl Quad12Leg {
     /// The leg's Jacobian (m/rad, base frame): column k is `∂ foot / ∂ a[k]`.
     pub fn jacobian(&self, a: [f64; 3]) -> [DVec3; 3] {
         let [w1, w2, w3] = self.links;
-        let t3 = cmul(cis(a[1] + a[2]), w3);
-        let t2 = cmul(cis(a[1]), w2) + t3;
+        let [e0, e1, e12, _] = cis4([a[0], a[1], a[1] + a[2], 0.0]);
+        let t3 = cmul(e12, w3);
+        let t2 = cmul(e1, w2) + t3;
         let w = w1 + t2;
         let hip = DVec3::new(w.y, self.offset_m, w.x);
-        let yaw = DMat3::from_rotation_z(a[0]);
+        let yaw = rotation_z(e0);
         let r = self.mount.rot * yaw;
         let pitch_col = |t: DVec2| {
             let dt = t.perp();

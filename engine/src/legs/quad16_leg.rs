@@ -27,8 +27,8 @@
 //!    `u₃ = w₃ + e^{ia}w₄` and the same two-link solve places the foot point.
 
 use super::ik::{
-    AnkleMode, IkClamped, IkError, IkOptions, cis, cmul, dls_solve, knee_bend, planar, two_link,
-    wrap_angle,
+    AnkleMode, IkClamped, IkError, IkOptions, cis, cis4, cmul, dls_solve, knee_bend, planar,
+    rotation_x, two_link, wrap_angle,
 };
 use super::{LegError, chain_of, foot_point_in_body};
 use crate::model::Model;
@@ -128,10 +128,10 @@ impl Quad16Leg {
     /// Foot point in the base frame (m) at joint angles `a` (rad).
     pub fn fk(&self, a: [f64; 4]) -> DVec3 {
         let [w1, w2, w3, w4] = self.links;
-        let w = w1 + cmul(cis(a[1]), w2 + cmul(cis(a[2]), w3 + cmul(cis(a[3]), w4)));
+        let [e0, e1, e2, e3] = cis4(a);
+        let w = w1 + cmul(e1, w2 + cmul(e2, w3 + cmul(e3, w4)));
         let hip = DVec3::new(w.y, self.offset_m, w.x);
-        self.mount
-            .transform_point(DMat3::from_rotation_x(a[0]) * hip)
+        self.mount.transform_point(rotation_x(e0) * hip)
     }
 
     /// Knee bend (rad): the signed angle from the thigh to the knee→wrist
@@ -225,12 +225,13 @@ impl Quad16Leg {
     pub fn jacobian(&self, a: [f64; 4]) -> [DVec3; 4] {
         let [w1, w2, w3, w4] = self.links;
         // tip relative to the ankle, the knee and the hip pitch joint
-        let t4 = cmul(cis(a[1] + a[2] + a[3]), w4);
-        let t3 = cmul(cis(a[1] + a[2]), w3) + t4;
-        let t2 = cmul(cis(a[1]), w2) + t3;
+        let [e0, e1, e12, e123] = cis4([a[0], a[1], a[1] + a[2], a[1] + a[2] + a[3]]);
+        let t4 = cmul(e123, w4);
+        let t3 = cmul(e12, w3) + t4;
+        let t2 = cmul(e1, w2) + t3;
         let w = w1 + t2;
         let hip = DVec3::new(w.y, self.offset_m, w.x);
-        let roll = DMat3::from_rotation_x(a[0]);
+        let roll = rotation_x(e0);
         let r = self.mount.rot * roll;
         // d(t)/dθ = i·t in the plane; back to (x, 0, z)
         let pitch_col = |t: DVec2| {
