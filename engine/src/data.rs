@@ -129,6 +129,43 @@ impl Data {
         }
     }
 
+    /// Runs `f` on this thread's spare full workspace for a model of
+    /// `model`'s shape (bodies, nq, nv), allocated at its first use on the
+    /// thread. For a second kinematic state beside a robot's own `Data` (a
+    /// controller at the estimated state), so that the robot's kinematics at
+    /// the true state survive for the stages after it instead of being
+    /// recomputed. The spare's kinematics cache is cleared before `f`: what it
+    /// held for another robot is never reused, so `f`'s results do not depend
+    /// on which thread or robot used the spare before (every field a
+    /// computation reads it writes first, as with a fresh `Data`).
+    pub fn with_spare<R>(model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
+        let taken = SPARE_DATA.with(|cell| {
+            let mut spares = cell.borrow_mut();
+            let i = spares.iter().position(|d| d.fits(model))?;
+            Some(spares.swap_remove(i))
+        });
+        let mut data = taken.unwrap_or_else(|| Data::new(model));
+        data.kin.level = 0;
+        let result = f(&mut data);
+        SPARE_DATA.with(|cell| {
+            let mut spares = cell.borrow_mut();
+            // one per shape in use; a thread that meets many shapes keeps the latest
+            if spares.len() >= MAX_SPARES {
+                spares.remove(0);
+            }
+            spares.push(data);
+        });
+        result
+    }
+
+    /// Whether this is a full workspace sized for `model`.
+    fn fits(&self, model: &Model) -> bool {
+        self.pose.len() == model.nbodies
+            && self.inertia_ref.len() == model.nbodies
+            && self.kin.q.len() == model.nq
+            && self.kin.v.len() == model.nv
+    }
+
     /// Whether the kinematic fields (poses, subspaces, velocities, reference
     /// inertias) hold [`crate::kinematics::forward_kinematics`] at `(q, v)` of
     /// `model`, bit for bit (what its cache checks).
@@ -187,6 +224,13 @@ pub(crate) struct BodyScratch {
     pub(crate) c: Vec<Motion>,
 }
 
+/// Most spare workspaces ([`Data::with_spare`]) a thread keeps.
+const MAX_SPARES: usize = 8;
+
+thread_local! {
+    static SPARE_DATA: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 thread_local! {
     static BODY_SCRATCH: std::cell::RefCell<BodyScratch> =
         std::cell::RefCell::new(BodyScratch::default());
@@ -212,5 +256,57 @@ impl BodyScratch {
     /// Returns the workspace to this thread.
     pub(crate) fn give_back(self) {
         BODY_SCRATCH.with(|cell| drop(cell.replace(self)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::forward_kinematics;
+    use crate::model::BaseKind;
+    use crate::rnea::rnea;
+    use crate::robots::{builtin, nominal_q};
+
+    fn model(name: &str, scale_mass: f64) -> Model {
+        let mut desc = builtin(name).unwrap();
+        for link in &mut desc.links {
+            link.mass_kg *= scale_mass;
+            link.inertia_kgm2 = link.inertia_kgm2.map(|i| i * scale_mass);
+        }
+        Model::from_description(&desc, BaseKind::Floating).unwrap()
+    }
+
+    /// Inverse dynamics on a spare equal a fresh workspace's bit for bit,
+    /// whatever the spare held before: another model of the same shape at
+    /// the same state, a model of another shape, a nested second spare.
+    #[test]
+    fn a_spare_workspace_computes_what_a_fresh_one_does() {
+        let (light, heavy, quad12) = (
+            model("quad16", 1.0),
+            model("quad16", 1.5),
+            model("quad12", 1.0),
+        );
+        let q = nominal_q("quad16").unwrap();
+        let v: Vec<f64> = (0..light.nv).map(|i| (i as f64 * 0.3).cos()).collect();
+        let a: Vec<f64> = (0..light.nv).map(|i| (i as f64 * 0.5).sin()).collect();
+        let fresh = |m: &Model| rnea(m, &mut Data::new(m), &q, &v, &a).to_vec();
+        let spare = |m: &Model| Data::with_spare(m, |d| rnea(m, d, &q, &v, &a).to_vec());
+        assert_ne!(fresh(&light), fresh(&heavy), "the two models differ");
+        let q12 = nominal_q("quad12").unwrap();
+        Data::with_spare(&quad12, |d| {
+            forward_kinematics(&quad12, d, &q12, &vec![0.0; quad12.nv])
+        });
+        for m in [&light, &heavy, &light] {
+            assert_eq!(spare(m), fresh(m));
+        }
+        Data::with_spare(&light, |outer| {
+            rnea(&light, outer, &q, &v, &a);
+            assert_eq!(
+                spare(&heavy),
+                fresh(&heavy),
+                "a nested spare is another workspace"
+            );
+            assert_eq!(outer.tau, fresh(&light), "and leaves the outer one alone");
+        });
     }
 }

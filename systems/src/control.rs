@@ -12,6 +12,7 @@ use bevy_ecs::prelude::*;
 use quadsim_components::{
     ControlRate, Controller, RobotBatch, RobotSensing, RobotSim, SimClock, SimConfig, SimThreadPool,
 };
+use quadsim_engine::Data;
 use quadsim_engine::contact::evaluate;
 use quadsim_engine::control::prescribed::PrescribedMode;
 use quadsim_engine::control::walker::WalkerInput;
@@ -135,6 +136,9 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
         };
         let (nq, nv) = (model.actuated_nq(), model.actuated_nv());
         tau_actuator[nv..].fill(0.0);
+        // With compliant payloads the controller has its own view; otherwise
+        // it shares the robot's `data`, unless it controls on the estimate.
+        let own_view = control.is_some();
         let (model, data) = match control {
             Some(c) => (&*c.model, &mut c.data),
             None => (&**model, data),
@@ -145,7 +149,9 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
         let mut normals = [glam::DVec3::Z; 4];
         let (q, v) = read_state(sensing, state);
         let (q, v) = (&q[..nq], &v[..nv]);
-        if let Some(s) = sensing.as_deref().filter(|s| s.controls_on_estimate()) {
+        let estimating = sensing.as_deref().filter(|s| s.controls_on_estimate());
+        let on_estimate = estimating.is_some();
+        if let Some(s) = estimating {
             // Sensed contacts; the ground normal under each foot is taken
             // as vertical (the estimator knows no contact geometry).
             let m = n.min(s.contacts.len());
@@ -176,7 +182,17 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             contacts: &contacts[..n],
             normals: &normals[..n],
         };
-        w.tick(model, data, q, v, &input, &mut tau_actuator[nb..]);
+        let tau_joints = &mut tau_actuator[nb..];
+        if on_estimate && !own_view {
+            // The kinematics at the estimated state go to a spare workspace:
+            // the robot's `data` keeps the true state's, which the `Contact`
+            // stage would otherwise compute again (same results either way).
+            Data::with_spare(model, |spare| {
+                w.tick(model, spare, q, v, &input, tau_joints)
+            });
+        } else {
+            w.tick(model, data, q, v, &input, tau_joints);
+        }
         return;
     }
     control_robot(sim);
