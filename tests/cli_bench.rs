@@ -113,3 +113,30 @@ fn bench_sim_seconds_sets_the_timed_steps() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `--sensing ground-truth` takes the sensors and the estimator out of the
+/// benchmarked robots (the controller reads the exact state); the default
+/// keeps the robots' own: noisy sensors and the estimate.
+#[test]
+fn bench_sensing_chooses_what_the_controller_reads() {
+    use quadsim::cli::bench::{BenchSensing, bench_scenario};
+    use quadsim::scenario::parse_scenario;
+    use quadsim::world::{Overrides, build_world};
+    for sensing in [BenchSensing::Estimated, BenchSensing::GroundTruth] {
+        let src = bench_scenario("quad16", 2, sensing).unwrap();
+        let scn = parse_scenario(std::path::Path::new("bench.toml"), src).unwrap();
+        let mut w = build_world(&scn, Overrides::default()).unwrap();
+        w.sim.run(200);
+        for (name, e) in &w.robots {
+            let sim = w.sim.robot(*e).unwrap();
+            let on_estimate = sim
+                .sensing
+                .as_deref()
+                .is_some_and(|s| s.controls_on_estimate());
+            assert_eq!(on_estimate, sensing == BenchSensing::Estimated, "{name}");
+            if sensing == BenchSensing::GroundTruth {
+                assert!(sim.sensing.is_none(), "{name}: no sensors, no estimator");
+            }
+        }
+    }
+}

@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use serde_json::{Value, json};
 
 use crate::error::{CliError, bad};
@@ -54,15 +54,49 @@ pub struct BenchArgs {
     /// the same; for comparing the speed).
     #[arg(long, default_value_t = quadsim_components::DEFAULT_BLOCK_ROBOTS)]
     pub block_robots: usize,
+    /// What the controller reads: `estimated` (the robots' default: noisy
+    /// IMU, encoders and contact sensors and the base estimator, as a real
+    /// robot) or `ground-truth` (the exact state; no sensors and no
+    /// estimator, the issue's "controller, contact and dynamics" alone).
+    #[arg(long, value_enum, default_value_t = BenchSensing::Estimated)]
+    pub sensing: BenchSensing,
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+/// What the benchmarked controllers read (`quadsim bench --sensing`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchSensing {
+    /// The robots' default sensors and base estimator; the controller reads the estimate.
+    Estimated,
+    /// No sensors, no estimator: the controller reads the exact state.
+    GroundTruth,
+}
+
+impl BenchSensing {
+    /// The name in the output (`estimated`, `ground_truth`, as `state_source`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Estimated => "estimated",
+            Self::GroundTruth => "ground_truth",
+        }
+    }
 }
 
 /// The scenario of one configuration. quad16 runs on ideal torque sources
 /// (not its default DC motors), like MuJoCo's `motor` actuators in the
 /// side-by-side model, so the figures compare with it and with earlier runs.
 pub fn herd_scenario(model: &str, robots: usize) -> Result<String, CliError> {
+    bench_scenario(model, robots, BenchSensing::Estimated)
+}
+
+/// [`herd_scenario`] with the controllers reading what `sensing` says.
+pub fn bench_scenario(
+    model: &str,
+    robots: usize,
+    sensing: BenchSensing,
+) -> Result<String, CliError> {
     let controller = match model {
         "quad16" => "kind = \"vmc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\"",
         "quad12" => "kind = \"joint_pd\"",
@@ -81,6 +115,10 @@ pub fn herd_scenario(model: &str, robots: usize) -> Result<String, CliError> {
              layout = {{ kind = \"grid\", columns = {cols}, spacing_m = [1.5, 1.0] }}\n\
              [herds.robot]\nmodel = \"{model}\"\nlog = false\n[herds.robot.controller]\n{controller}\n"
         );
+        if sensing == BenchSensing::GroundTruth {
+            s += "[herds.robot.sensors]\npreset = \"none\"\n\
+                  [herds.robot.estimator]\nstate_source = \"ground_truth\"\n";
+        }
     }
     Ok(s)
 }
@@ -114,7 +152,7 @@ impl BenchPoint {
 /// Builds, warms up and times one configuration.
 pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoint, CliError> {
     let build = |n: usize| {
-        let src = herd_scenario(&a.model, n)?;
+        let src = bench_scenario(&a.model, n, a.sensing)?;
         let scn = parse_scenario(Path::new("bench.toml"), src).map_err(|e| bad(e.to_string()))?;
         build_world(
             &scn,
@@ -201,12 +239,16 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     }
     bar.finish_and_clear();
     println!(
-        "{} ({}), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
+        "{} ({}; controller on the {} state), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
         a.model,
         if a.model == "quad16" {
             "trotting at 0.5 m/s under VMC"
         } else {
             "standing under joint PD"
+        },
+        match a.sensing {
+            BenchSensing::Estimated => "estimated",
+            BenchSensing::GroundTruth => "exact",
         },
         a.repeats,
         a.steps,
@@ -254,6 +296,7 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     if let Some(path) = &a.json {
         let v: Value = json!({
             "model": a.model,
+            "sensing": a.sensing.name(),
             "steps_per_block": a.steps,
             "repeats": a.repeats,
             "warmup_steps": a.warmup,
@@ -270,6 +313,7 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     // The last line: the last configuration as one line of JSON (the issue's
     // keys), with every configuration under `points`.
     let mut last = rows.last().cloned().unwrap_or_else(|| json!({}));
+    last["sensing"] = json!(a.sensing.name());
     last["points"] = Value::Array(rows);
     println!("{last}");
     Ok(())
