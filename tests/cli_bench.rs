@@ -1,16 +1,36 @@
 //! `quadsim bench` end to end: a tiny configuration writes its figures as
 //! JSON, with throughput and the counted memory per robot.
 
-use std::process::Command;
+use std::path::PathBuf;
+use std::process::{Command, Output};
 
-#[test]
-fn bench_reports_throughput_and_memory_per_robot() {
-    let dir = std::env::temp_dir().join(format!("quadsim-bench-{}", std::process::id()));
+/// Runs `quadsim bench ARGS --json FILE` in a fresh temporary directory
+/// named after `tag`, and asserts it succeeded: (the directory, the JSON
+/// file, the output).
+fn bench(tag: &str, args: &[&str]) -> (PathBuf, PathBuf, Output) {
+    let dir = std::env::temp_dir().join(format!("quadsim-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("bench.json");
     let out = Command::new(env!("CARGO_BIN_EXE_quadsim"))
-        .args([
-            "bench",
+        .arg("bench")
+        .args(args)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (dir, json, out)
+}
+
+#[test]
+fn bench_reports_throughput_and_memory_per_robot() {
+    let (dir, json, out) = bench(
+        "bench",
+        &[
             "--robots",
             "1,4",
             "--threads",
@@ -21,15 +41,7 @@ fn bench_reports_throughput_and_memory_per_robot() {
             "1",
             "--warmup",
             "10",
-            "--json",
-        ])
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("robot-steps/s"), "{stdout}");
@@ -70,12 +82,9 @@ fn bench_reports_throughput_and_memory_per_robot() {
 /// steps of 0.5 ms), and refuses less than one step.
 #[test]
 fn bench_sim_seconds_sets_the_timed_steps() {
-    let dir = std::env::temp_dir().join(format!("quadsim-bench-s-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let json = dir.join("bench.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_quadsim"))
-        .args([
-            "bench",
+    let (dir, json, _) = bench(
+        "bench-s",
+        &[
             "--robots",
             "1",
             "--threads",
@@ -86,15 +95,7 @@ fn bench_sim_seconds_sets_the_timed_steps() {
             "1",
             "--warmup",
             "1",
-            "--json",
-        ])
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
     );
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(v["steps_per_block"], 20, "{v}");

@@ -354,12 +354,8 @@ pub(crate) mod tests {
         a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
     }
 
-    /// Checks four lanes against libm, by the inlined lanes and the
-    /// dispatched x4 version.
-    fn check4(x: [f64; 4]) {
-        let (s, c) = sin_cos_lanes(x);
-        let (s4, c4) = sin_cos_x4(x);
-        let (s1, c1) = sin_cos_lanes([x[0]]);
+    /// Asserts that lanes' sines `s` and cosines `c` of `x` are libm's bits.
+    pub(crate) fn assert_libm_bits(x: [f64; 4], s: [f64; 4], c: [f64; 4]) {
         for k in 0..4 {
             let (ls, lc) = libm::sincos(x[k]);
             assert!(
@@ -370,6 +366,18 @@ pub(crate) mod tests {
                 s[k],
                 c[k]
             );
+        }
+    }
+
+    /// Checks four lanes against libm, by the inlined lanes and the
+    /// dispatched x4 version.
+    fn check4(x: [f64; 4]) {
+        let (s, c) = sin_cos_lanes(x);
+        let (s4, c4) = sin_cos_x4(x);
+        let (s1, c1) = sin_cos_lanes([x[0]]);
+        assert_libm_bits(x, s, c);
+        for k in 0..4 {
+            let (ls, lc) = libm::sincos(x[k]);
             assert!(same(s4[k], ls) && same(c4[k], lc), "x4 at {:e}", x[k]);
         }
         assert!(
