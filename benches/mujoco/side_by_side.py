@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""quadsim against MuJoCo, side by side, on this machine.
+
+MuJoCo steps the shared quad16 model (`quad16.xml` beside this script, a
+copy of the project's `shared/models/quad16.xml`: dt 0.5 ms, PD position servos holding the standing pose, four foot
+contacts), the issue's reference; quadsim runs `quadsim bench --robots 1
+--threads 1` (one quad16 trotting at 0.5 m/s under VMC, the full closed-loop
+step), with the controller on the estimate (sensors and estimator, the
+default) and on the exact state (`--sensing ground-truth`). The two run in
+alternating rounds in one process tree, so that a loaded or throttled
+machine slows both alike; the ratio MuJoCo µs / quadsim µs is quadsim's step
+rate in multiples of MuJoCo's (the issue's target: at least 3).
+
+    python3 -m venv .venv && .venv/bin/pip install -r benches/mujoco/requirements.txt
+    cargo build --release
+    .venv/bin/python benches/mujoco/side_by_side.py [--rounds 3] [--steps 4000]
+
+Prints one line per round and, last, one line of JSON with every figure.
+Wall-clock figures: medians of blocks, single thread.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def mujoco_us_per_step(model_path: Path, steps: int, blocks: int) -> tuple[float, int]:
+    """Median wall time of one `mj_step` (µs) over `blocks` blocks of `steps`
+    steps, after 1 s of settling onto the feet; and the contacts then."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_path(str(model_path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetData(m, d)
+    if m.nkey:
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+    settle = int(round(1.0 / m.opt.timestep))
+    mujoco.mj_step(m, d, nstep=settle)
+    times = []
+    for _ in range(blocks):
+        t0 = time.perf_counter()
+        mujoco.mj_step(m, d, nstep=steps)
+        times.append((time.perf_counter() - t0) / steps * 1e6)
+    return statistics.median(times), int(d.ncon)
+
+
+def quadsim_us_per_step(exe: Path, steps: int, blocks: int, sensing: str) -> float:
+    """`quadsim bench` for one robot on one thread: µs per step (median block)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "bench.json"
+        subprocess.run(
+            [str(exe), "bench", "--robots", "1", "--threads", "1", "--steps", str(steps),
+             "--repeats", str(blocks), "--sensing", sensing, "--json", str(out)],
+            check=True, stdout=subprocess.DEVNULL,
+        )
+        point = json.loads(out.read_text())["points"][0]
+    return point["us_per_robot_step"]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quadsim", type=Path, default=ROOT / "target/release/quadsim",
+                    help="the quadsim binary (default: target/release/quadsim)")
+    ap.add_argument("--model", type=Path, default=Path(__file__).with_name("quad16.xml"),
+                    help="the MuJoCo model (default: quad16.xml beside this script)")
+    ap.add_argument("--rounds", type=int, default=3, help="alternating rounds")
+    ap.add_argument("--steps", type=int, default=4000, help="steps per timed block")
+    ap.add_argument("--blocks", type=int, default=5, help="timed blocks per figure (median)")
+    a = ap.parse_args()
+    for path, what in [(a.quadsim, "quadsim binary (cargo build --release)"), (a.model, "MuJoCo model")]:
+        if not path.is_file():
+            print(f"error: {path}: no {what}", file=sys.stderr)
+            return 2
+    if a.rounds < 1 or a.steps < 1 or a.blocks < 1:
+        print("error: --rounds, --steps and --blocks must be at least 1", file=sys.stderr)
+        return 2
+    rounds = []
+    print(f"{'round':>5} {'MuJoCo µs':>10} {'contacts':>8} {'quadsim µs':>11} {'ratio':>6}"
+          f" {'exact-state µs':>14} {'ratio':>6}")
+    for r in range(a.rounds):
+        mj, ncon = mujoco_us_per_step(a.model, a.steps, a.blocks)
+        qs = quadsim_us_per_step(a.quadsim, a.steps, a.blocks, "estimated")
+        gt = quadsim_us_per_step(a.quadsim, a.steps, a.blocks, "ground-truth")
+        rounds.append({"mujoco_us_per_step": mj, "mujoco_contacts": ncon,
+                       "quadsim_us_per_step": qs, "quadsim_ground_truth_us_per_step": gt,
+                       "ratio": mj / qs, "ratio_ground_truth": mj / gt})
+        print(f"{r + 1:>5} {mj:>10.2f} {ncon:>8} {qs:>11.2f} {mj / qs:>5.2f}× {gt:>14.2f} {mj / gt:>5.2f}×")
+        if ncon != 4:
+            print(f"warning: MuJoCo's quad16 has {ncon} contacts, not its four feet", file=sys.stderr)
+    ratios = [x["ratio"] for x in rounds]
+    print(f"quadsim's step rate / MuJoCo's: {min(ratios):.2f}–{max(ratios):.2f}× "
+          f"(median {statistics.median(ratios):.2f}×; target ≥ 3×)")
+    print(json.dumps({"rounds": rounds, "ratio_median": statistics.median(ratios),
+                      "load_average": os.getloadavg()[0]}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
