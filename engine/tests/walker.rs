@@ -7,7 +7,7 @@ use quadsim_engine::contact::{
     ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
 };
 use quadsim_engine::control::vmc::VmcCommand;
-use quadsim_engine::control::walker::{Walker, WalkerInput, WalkerParams};
+use quadsim_engine::control::walker::{ROUND_OFF_ROBUST, Walker, WalkerInput, WalkerParams};
 use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::model::{BaseKind, Model};
@@ -28,10 +28,23 @@ struct Run {
 }
 
 fn run(name: &str, forward_mps: f64, duration_s: f64) -> Run {
+    run_from(name, forward_mps, duration_s, |_| {}, |_| {})
+}
+
+/// [`run`] with the parameters changed by `tune` and the nominal stance by
+/// `perturb`.
+fn run_from(
+    name: &str,
+    forward_mps: f64,
+    duration_s: f64,
+    tune: impl Fn(&mut WalkerParams),
+    perturb: impl Fn(&mut State),
+) -> Run {
     let desc = robots::builtin(name).unwrap();
     let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
     let mut data = Data::new(&model);
     let mut params = WalkerParams::default_for(&desc, &model);
+    tune(&mut params);
     params.command = VmcCommand {
         forward_mps,
         lateral_mps: 0.0,
@@ -45,6 +58,7 @@ fn run(name: &str, forward_mps: f64, duration_s: f64) -> Run {
         q: robots::nominal_q(name).unwrap(),
         v: vec![0.0; model.nv],
     };
+    perturb(&mut st);
     let mut ws = StepWorkspace::new(&model);
     let mut tau = vec![0.0; model.nv];
     let mut tj = vec![0.0; model.nv - 6];
@@ -136,6 +150,76 @@ fn quad16_trots_at_three_quarters_of_a_metre_per_second() {
         "mean speed {} m/s",
         r.mean_speed_mps
     );
+}
+
+/// Runs the 0.75 m/s trot with the parameters changed by `tune` from 8
+/// starts whose base is moved by up to 1e-9 m along each axis and turned by
+/// 1e-9 rad about a random axis (seeded), and checks each run against the
+/// 0.75 m/s test's bounds. Such perturbations are what a faithful numeric
+/// change (a QP solver, libm's sin/cos) makes within a few ticks.
+fn three_quarters_from_perturbed_starts(tune: impl Fn(&mut WalkerParams)) {
+    use glam::DQuat;
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    for start in 0..8 {
+        let dp = DVec3::new(
+            rng.random_range(-1e-9..1e-9),
+            rng.random_range(-1e-9..1e-9),
+            rng.random_range(-1e-9..1e-9),
+        );
+        let axis = DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize();
+        let r = run_from("quad16", 0.75, 10.0, &tune, |st| {
+            for k in 0..3 {
+                st.q[k] += dp[k];
+            }
+            // q[3..7] = base quaternion (x, y, z, w), turned in the world
+            let q0 = DQuat::from_xyzw(st.q[3], st.q[4], st.q[5], st.q[6]);
+            let q1 = (DQuat::from_axis_angle(axis, 1e-9) * q0).normalize();
+            st.q[3..7].copy_from_slice(&q1.to_array());
+        });
+        assert!(
+            r.min_height_m > 0.4,
+            "start {start}: base fell to {} m",
+            r.min_height_m
+        );
+        assert!(
+            r.max_tilt_rad < 0.3,
+            "start {start}: tilt reached {} rad",
+            r.max_tilt_rad
+        );
+        assert!(
+            (r.mean_speed_mps - 0.75).abs() < 0.05,
+            "start {start}: mean speed {} m/s",
+            r.mean_speed_mps
+        );
+    }
+}
+
+/// With the stance foot press and the friction reserve
+/// ([`ROUND_OFF_ROBUST`]) the 0.75 m/s trot does not hang on the last bits
+/// of its start: all 8 perturbed starts hold (see
+/// [`three_quarters_from_perturbed_starts`]).
+#[test]
+fn quad16_trot_at_three_quarters_with_foot_press_survives_round_off_sized_perturbations() {
+    three_quarters_from_perturbed_starts(|p| {
+        (p.stance_foot_press, p.friction_fraction) = ROUND_OFF_ROBUST;
+    });
+}
+
+/// The default trot at 0.75 m/s is not robust to round-off: its nominal start
+/// holds, but 11 of 41 starts perturbed by ±1e-9 in one coordinate fall
+/// (the sparse force-QP solver or libm's sin/cos tip the nominal start
+/// over). See `WalkerParams::stance_foot_press` for the diagnosis and why
+/// the fix is not the default.
+#[test]
+#[ignore = "not reached: the default 0.75 m/s trot falls from about 1 in 4 perturbed starts"]
+fn quad16_trot_at_three_quarters_survives_round_off_sized_perturbations() {
+    three_quarters_from_perturbed_starts(|_| {});
 }
 
 /// Study A's target, not reached yet: quad16 falls within about 2–4 s at a
