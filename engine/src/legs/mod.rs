@@ -236,9 +236,9 @@ impl LegKinematics {
         Ok(())
     }
 
-    /// [`Quad16Leg::ik_clamped`] / [`Quad12Leg::ik_clamped`] into `out`;
-    /// returns the foot point reached (m, base frame) and whether the target
-    /// was projected.
+    /// [`Quad16Leg::ik_clamped`] / [`Quad12Leg::ik_clamped`]'s angles into
+    /// `out`; returns whether the target was projected (the foot point
+    /// reached is not computed: [`Self::fk`] of `out` gives it).
     ///
     /// # Errors
     /// [`IkError::NonFinite`].
@@ -250,19 +250,20 @@ impl LegKinematics {
         target_m: DVec3,
         opts: &IkOptions,
         out: &mut [f64],
-    ) -> Result<(DVec3, bool), IkError> {
-        match self {
+    ) -> Result<bool, IkError> {
+        let clamped = match self {
             Self::Quad16(l) => {
-                let s = l.ik_clamped(target_m, opts)?;
-                out.copy_from_slice(&s.angles_rad);
-                Ok((s.foot_m, s.clamped))
+                let (a, clamped) = l.ik_clamped_angles(target_m, opts)?;
+                out.copy_from_slice(&a);
+                clamped
             }
             Self::Quad12(l) => {
-                let s = l.ik_clamped(target_m, opts)?;
-                out.copy_from_slice(&s.angles_rad);
-                Ok((s.foot_m, s.clamped))
+                let (a, clamped) = l.ik_clamped_angles(target_m, opts)?;
+                out.copy_from_slice(&a);
+                clamped
             }
-        }
+        };
+        Ok(clamped)
     }
 
     /// The leg's joint velocities (rad/s) for a foot velocity (m/s, base

@@ -169,12 +169,26 @@ impl Quad16Leg {
     /// # Errors
     /// [`IkError::NonFinite`] only.
     pub fn ik_clamped(&self, target_m: DVec3, opts: &IkOptions) -> Result<IkClamped<4>, IkError> {
-        let (angles_rad, clamped) = self.solve(target_m, opts, true)?;
+        let (angles_rad, clamped) = self.ik_clamped_angles(target_m, opts)?;
         Ok(IkClamped {
             angles_rad,
             foot_m: self.fk(angles_rad),
             clamped,
         })
+    }
+
+    /// [`Self::ik_clamped`]'s angles and whether the target was projected,
+    /// without the forward kinematics of the foot point reached (the
+    /// controllers' per-tick IK reads only the angles).
+    ///
+    /// # Errors
+    /// [`IkError::NonFinite`] only.
+    pub fn ik_clamped_angles(
+        &self,
+        target_m: DVec3,
+        opts: &IkOptions,
+    ) -> Result<([f64; 4], bool), IkError> {
+        self.solve(target_m, opts, true)
     }
 
     fn solve(
