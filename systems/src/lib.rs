@@ -42,8 +42,9 @@ pub use metrics::{record_metrics, record_robot};
 pub use payload::apply_payload_events;
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{
-    SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,
-    register_dynamics, register_gait, register_integrate, register_publish, register_sense,
+    SimSystems, StageMajorPass, StepSchedule, build_step_schedule, register_contact,
+    register_control, register_dynamics, register_gait, register_integrate, register_publish,
+    register_sense,
 };
 pub use sense::{sense_robot, sense_robots};
 pub use simulation::Simulation;
