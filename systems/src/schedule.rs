@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
-use crate::blocks::{robot_blocks, stage_major, step_robot_blocks};
+use crate::blocks::{stage_major, step_robot_blocks};
 use crate::contact::update_contacts;
 use crate::control::run_controllers;
 use crate::log::{LogChannel, MonitorChannel, log_due, log_step};
@@ -178,12 +178,15 @@ pub fn register_contact(schedule: &mut Schedule) {
 /// Registers the dynamics systems (none: see [`SimSystems::Dynamics`]).
 pub fn register_dynamics(_schedule: &mut Schedule) {}
 
-/// Registers [`step_robot_blocks`] (gated by [`robot_blocks`]) or
-/// [`step_robots`] (in [`StageMajorPass`]), then [`advance_clock`].
+/// Registers [`step_robot_blocks`] (which returns at once unless the layout is
+/// [`RobotBlocks`](quadsim_components::StageLayout::RobotBlocks), so it needs
+/// no run condition of its own: evaluating one every step costs more than
+/// the system's own check) or [`step_robots`] (in [`StageMajorPass`]), then
+/// [`advance_clock`].
 pub fn register_integrate(schedule: &mut Schedule) {
     schedule.add_systems(
         (
-            step_robot_blocks.run_if(robot_blocks),
+            step_robot_blocks,
             step_robots.in_set(StageMajorPass),
             advance_clock,
         )
