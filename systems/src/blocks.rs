@@ -28,7 +28,9 @@ pub fn stage_major(layout: Option<Res<StageLayout>>) -> bool {
     matches!(layout.as_deref(), Some(StageLayout::StageMajor))
 }
 
-/// Whether [`step_robot_blocks`] runs instead (the default).
+/// Whether [`step_robot_blocks`] does the robots' work instead (the default;
+/// the system checks the layout itself, so the step schedule does not use
+/// this as its run condition).
 pub fn robot_blocks(layout: Option<Res<StageLayout>>) -> bool {
     !stage_major(layout)
 }
@@ -39,7 +41,9 @@ pub fn robot_blocks(layout: Option<Res<StageLayout>>) -> bool {
 /// ([`observe_robot`]), `Integrate` (each lane group stepped, as in
 /// [`step_robots`](crate::step_robots)) and the `Publish` stage's metrics
 /// ([`record_robot`]). Runs in the `Integrate` set, before the clock
-/// advances; world-level systems in the earlier sets run before it.
+/// advances; world-level systems in the earlier sets run before it. Under
+/// [`StageLayout::StageMajor`] it returns at once (the stage-major systems
+/// do the work).
 #[allow(clippy::too_many_arguments)] // a system's parameters are its data access
 pub fn step_robot_blocks(
     mut batch: ResMut<RobotBatch>,

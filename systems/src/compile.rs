@@ -2,22 +2,28 @@
 //! schedule that runs before the step schedule, never inside a step.
 //!
 //! [`mark_dirty_robots`] finds robots whose description components changed
-//! (bevy change detection on the roots, observers of inserts on the parts,
-//! plus removals); [`compile_dirty_robots`] reads their
+//! (bevy change detection on the roots, observers of inserts and removals on
+//! the parts); [`compile_dirty_robots`] reads their
 //! entities back with [`describe_robot_with_links`], compiles a
 //! [`Model`] and installs it in the [`RobotBatch`]. A robot that does not
 //! compile gets a [`CompileFailure`] and keeps its last valid model.
+//!
+//! [`crate::Simulation::step`] runs the schedule only when [`CompileGate`]
+//! sees something it could act on; otherwise each of its systems would
+//! return without a change.
 
 use std::sync::{Arc, Weak};
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
+use bevy_ecs::system::SystemState;
 use quadsim_components::{
     BelongsTo, CenterOfMass, Collider, ColliderOf, CompileError, CompileFailure, ComputedInertia,
-    ControlView, EffortLimit, Foot, FootPoint, Inertia, Joint, JointActuators, JointArmature,
-    JointConnection, JointDamping, JointFriction, JointLimits, JointPlacement, Link, Mass, Robot,
-    RobotBase, RobotBatch, RobotIndex, RobotModelName, RobotParts, RobotSim, SimConfig,
-    SpringDamper, VelocityLimit, Visual, VisualOf, describe_robot_with_links,
+    ControlView, DefaultGroundPlane, EffortLimit, Foot, FootPoint, Ground, Inertia, Joint,
+    JointActuators, JointArmature, JointConnection, JointDamping, JointFriction, JointLimits,
+    JointPlacement, Link, Mass, PayloadEvents, Robot, RobotBase, RobotBatch, RobotIndex,
+    RobotModelName, RobotParts, RobotSim, SimClock, SimConfig, SpringDamper, Terrain,
+    VelocityLimit, Visual, VisualOf, describe_robot_with_links,
 };
 use quadsim_engine::Model;
 use quadsim_engine::actuator_model::{ActuatorBank, ActuatorKind, add_reflected_inertia};
@@ -35,8 +41,20 @@ pub struct DirtyRobots {
     /// Link, joint and shape entities whose description components were
     /// inserted since the last compile ([`note_part_edit`]; may repeat).
     pub parts: Vec<Entity>,
-    /// A robot was despawned: drop its slot and renumber [`RobotIndex`].
+    /// Entities that lost an optional description component
+    /// ([`RemovableParts`]) since the last compile ([`note_part_removal`];
+    /// may repeat).
+    pub removed: Vec<Entity>,
+    /// A robot was despawned: drop its slot and renumber [`RobotIndex`]
+    /// ([`note_robot_removal`]).
     pub prune: bool,
+}
+
+impl DirtyRobots {
+    /// Whether anything waits for the compile stage.
+    pub fn is_empty(&self) -> bool {
+        self.robots.is_empty() && self.parts.is_empty() && self.removed.is_empty() && !self.prune
+    }
 }
 
 /// The compiled models in use, interned by articulation
@@ -163,11 +181,43 @@ pub fn note_shape_detach(
     }
 }
 
-/// Registers [`note_part_edit`] and [`note_shape_detach`] (once per world,
-/// before any robot is spawned).
+/// Description components whose removal changes the description (the other
+/// ones are required by the entity's kind, or their removal detaches the
+/// part from its robot, which changes the root's [`RobotParts`]).
+pub type RemovableParts = (
+    Inertia,
+    JointLimits,
+    Foot,
+    FootPoint,
+    Link,
+    Joint,
+    SpringDamper,
+);
+
+/// Observer: one of the [`RemovableParts`] left an entity (removed, or the
+/// entity despawned). The entity waits in [`DirtyRobots::removed`] for
+/// [`mark_dirty_robots`], which marks its robot if it still belongs to one (a
+/// despawned part has no owner any more; its robot's `RobotParts` changed
+/// instead).
+pub fn note_part_removal(removal: On<Remove<RemovableParts>>, mut dirty: ResMut<DirtyRobots>) {
+    if dirty.removed.last() != Some(&removal.entity) {
+        dirty.removed.push(removal.entity);
+    }
+}
+
+/// Observer: a [`Robot`] was removed or despawned: the compile stage drops
+/// its slot.
+pub fn note_robot_removal(_removal: On<Remove<Robot>>, mut dirty: ResMut<DirtyRobots>) {
+    dirty.prune = true;
+}
+
+/// Registers [`note_part_edit`], [`note_shape_detach`], [`note_part_removal`]
+/// and [`note_robot_removal`] (once per world, before any robot is spawned).
 pub fn add_edit_observers(world: &mut World) {
     world.add_observer(note_part_edit);
     world.add_observer(note_shape_detach);
+    world.add_observer(note_part_removal);
+    world.add_observer(note_robot_removal);
 }
 
 /// The robot a link, joint, collider or visual entity belongs to.
@@ -184,24 +234,13 @@ fn part_owner(
     owners.get(link).ok().map(|b| b.0)
 }
 
-/// Optional description components whose removal changes the description.
-type Removals<'w, 's> = (
-    RemovedComponents<'w, 's, Inertia>,
-    RemovedComponents<'w, 's, JointLimits>,
-    RemovedComponents<'w, 's, Foot>,
-    RemovedComponents<'w, 's, FootPoint>,
-    RemovedComponents<'w, 's, Link>,
-    RemovedComponents<'w, 's, Joint>,
-    RemovedComponents<'w, 's, SpringDamper>,
-);
-
 /// Collects the robots whose description changed since the last run: roots
 /// by bevy change detection (one entity per robot), parts from the
-/// [`note_part_edit`] observer, plus removals. A changed [`SimConfig`]
+/// [`note_part_edit`] and [`note_part_removal`] observers (despawned robots
+/// were flagged by [`note_robot_removal`]). A changed [`SimConfig`]
 /// (gravity, passive model) marks every robot. With nothing edited, this
 /// costs a few instructions per robot (the roots' change ticks), not a scan
 /// of every part.
-#[allow(clippy::too_many_arguments)]
 pub fn mark_dirty_robots(
     mut dirty: ResMut<DirtyRobots>,
     config: Res<SimConfig>,
@@ -209,36 +248,94 @@ pub fn mark_dirty_robots(
     roots: Query<Entity, (With<Robot>, RootChanged)>,
     shapes: Query<(Option<&ColliderOf>, Option<&VisualOf>)>,
     owners: Query<&BelongsTo>,
-    mut removed: Removals,
-    mut removed_robots: RemovedComponents<Robot>,
 ) {
     if config.is_changed() {
         dirty.robots.extend(all_roots.iter());
     }
     dirty.robots.extend(roots.iter());
-    let DirtyRobots { robots, parts, .. } = &mut *dirty;
+    let DirtyRobots {
+        robots,
+        parts,
+        removed,
+        ..
+    } = &mut *dirty;
     for e in parts.drain(..) {
         if let Some(owner) = part_owner(e, &shapes, &owners) {
             robots.push(owner);
         }
     }
-    let (r0, r1, r2, r3, r4, r5, r6) = &mut removed;
-    let removed_entities = r0
-        .read()
-        .chain(r1.read())
-        .chain(r2.read())
-        .chain(r3.read())
-        .chain(r4.read())
-        .chain(r5.read())
-        .chain(r6.read());
-    for e in removed_entities {
+    for e in removed.drain(..) {
         // A despawned entity has no owner any more; its robot's RobotParts changed instead.
         if let Ok(owner) = owners.get(e) {
-            dirty.robots.push(owner.0);
+            robots.push(owner.0);
         }
     }
-    if removed_robots.read().next().is_some() {
-        dirty.prune = true;
+}
+
+/// What can give the compile schedule work, read by [`CompileGate`]: each
+/// line below is what one of its systems acts on.
+type CompileTriggers = (
+    // `mark_dirty_robots`: observed edits and removals, the roots' change
+    // ticks, the configuration
+    Res<'static, DirtyRobots>,
+    Query<'static, 'static, (), (With<Robot>, RootChanged)>,
+    Res<'static, SimConfig>,
+    // `apply_payload_events`: the next payload event and the clock
+    Option<Res<'static, PayloadEvents>>,
+    Res<'static, SimClock>,
+    // `compile_ground`: the terrains and default plane, and whether every
+    // robot uses the current ground
+    Res<'static, DefaultGroundPlane>,
+    Query<'static, 'static, (), Changed<Terrain>>,
+    RemovedComponents<'static, 'static, Terrain>,
+    Res<'static, Ground>,
+    Res<'static, RobotBatch>,
+);
+
+/// Whether the compile schedule can have anything to do, so that
+/// [`crate::Simulation::step`] can skip it (its fixed cost is most of the
+/// schedules' overhead on a small world). It checks, with its own change
+/// ticks (each change is seen once, by the next check), what each system of
+/// the schedule acts on: pending observed edits, removals or despawns
+/// ([`DirtyRobots`]), a root component changed (the same filter as
+/// [`mark_dirty_robots`]), a changed [`SimConfig`], a payload event due
+/// ([`crate::apply_payload_events`]), a terrain added, changed or removed, the
+/// default plane changed, or a robot not on the current [`Ground`]
+/// ([`crate::compile_ground`]). When all are false, every system of the
+/// schedule would return without a change, so skipping it changes nothing.
+/// A change made by the schedule itself (a payload attach changes the
+/// root's `RobotParts`) opens the gate once more, for a run that finds
+/// nothing new.
+pub struct CompileGate(SystemState<CompileTriggers>);
+
+impl std::fmt::Debug for CompileGate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CompileGate").finish_non_exhaustive()
+    }
+}
+
+impl CompileGate {
+    /// A gate on `world`, which sees everything as changed at its first check.
+    pub fn new(world: &mut World) -> Self {
+        Self(SystemState::new(world))
+    }
+
+    /// Whether the compile schedule should run now (also when a resource it
+    /// reads is missing: the schedule then reports it).
+    pub fn due(&mut self, world: &World) -> bool {
+        let Ok((dirty, roots, config, events, clock, plane, terrains, mut removed, ground, batch)) =
+            self.0.get(world)
+        else {
+            return true;
+        };
+        // every check runs (no short-circuit), so that each consumes its changes
+        let edits = !dirty.is_empty() | !roots.is_empty() | config.is_changed();
+        let payload = events.is_some_and(|e| crate::payload::payload_due(&e, clock.time_s));
+        let ground = plane.is_changed()
+            | !terrains.is_empty()
+            | (removed.read().count() > 0)
+            | crate::ground::ground_stale(&batch, &ground);
+        edits | payload | ground
     }
 }
 

@@ -20,10 +20,7 @@ pub fn compile_ground(
 ) {
     let changed =
         plane.is_changed() || removed.read().count() > 0 || terrains.iter().any(|t| t.is_changed());
-    let stale = batch
-        .sims
-        .iter()
-        .any(|s| !Arc::ptr_eq(&s.contact.terrain, &ground.0));
+    let stale = ground_stale(&batch, &ground);
     if changed {
         let mut list: Vec<&Terrain> = terrains.iter().map(|t| t.into_inner()).collect();
         list.sort_by(|a, b| a.name.cmp(&b.name));
@@ -39,4 +36,13 @@ pub fn compile_ground(
             sim.contact.terrain = ground.0.clone();
         }
     }
+}
+
+/// Whether a robot's contact model is not on the current [`Ground`] (a robot
+/// compiled since, or the ground replaced).
+pub(crate) fn ground_stale(batch: &RobotBatch, ground: &Ground) -> bool {
+    batch
+        .sims
+        .iter()
+        .any(|s| !Arc::ptr_eq(&s.contact.terrain, &ground.0))
 }

@@ -4,7 +4,8 @@
 //! Each [`Simulation::step`] runs two schedules:
 //!
 //! 1. [`CompileSchedule`]: robots whose description components changed are
-//!    recompiled (never inside a step);
+//!    recompiled (never inside a step); skipped when its [`CompileGate`]
+//!    sees nothing it could act on;
 //! 2. [`StepSchedule`]: the [`SimSystems`] stages `Sense → Gait → Control → Contact →
 //!    Dynamics → Integrate → Publish`, with robots stepped in parallel on
 //!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool), block
@@ -26,8 +27,8 @@ mod step;
 
 pub use blocks::{plan_blocks, robot_blocks, stage_major, step_robot_blocks};
 pub use compile::{
-    CompileSchedule, DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule,
-    compile_dirty_robots, mark_dirty_robots,
+    CompileGate, CompileSchedule, DirtyRobots, SharedModels, add_edit_observers,
+    build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
 };
 pub use contact::{height_above_ground, observe_robot, update_contacts};
 pub use control::{control_robot, control_robot_at, control_stage, run_controllers};
@@ -42,8 +43,9 @@ pub use metrics::{record_metrics, record_robot};
 pub use payload::apply_payload_events;
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{
-    SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,
-    register_dynamics, register_gait, register_integrate, register_publish, register_sense,
+    SimSystems, StageMajorPass, StepSchedule, build_step_schedule, register_contact,
+    register_control, register_dynamics, register_gait, register_integrate, register_publish,
+    register_sense,
 };
 pub use sense::{sense_robot, sense_robots};
 pub use simulation::Simulation;

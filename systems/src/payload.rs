@@ -16,6 +16,14 @@ use quadsim_components::{
 /// before the step that starts at t, whatever the rounding of the clock.
 const TIME_SLACK_S: f64 = 1e-9;
 
+/// Whether a payload event is due at `now_s` (what
+/// [`apply_payload_events`] would apply).
+pub(crate) fn payload_due(events: &PayloadEvents, now_s: f64) -> bool {
+    events.events[events.applied..]
+        .first()
+        .is_some_and(|e| e.t_s <= now_s + TIME_SLACK_S)
+}
+
 /// The compile stage's first system: applies every payload event due at
 /// the current time. Errors (an unknown link) are reported on stderr and the
 /// event is skipped; scenario loading checks names beforehand.

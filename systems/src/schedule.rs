@@ -3,7 +3,7 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
-use crate::blocks::{robot_blocks, stage_major, step_robot_blocks};
+use crate::blocks::{stage_major, step_robot_blocks};
 use crate::contact::update_contacts;
 use crate::control::run_controllers;
 use crate::log::{LogChannel, MonitorChannel, log_due, log_step};
@@ -58,7 +58,10 @@ pub struct StepSchedule;
 /// [`record_metrics`]) run instead under
 /// [`StageMajor`](quadsim_components::StageLayout::StageMajor). Robots do not
 /// interact, so both give the same bits; world-level systems added to the
-/// sets before `Integrate` run before the robot pass in either layout.
+/// sets before `Integrate` run before the robot pass in either layout. The
+/// stage-major systems are also in the [`StageMajorPass`] set, whose one run
+/// condition ([`stage_major`]) is evaluated once per step, when its first
+/// system (`sense_robots`) comes up, instead of once per system.
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SimSystems {
     /// Sensors and state estimation.
@@ -90,6 +93,17 @@ impl SimSystems {
     ];
 }
 
+/// The stage-major systems ([`sense_robots`], [`run_controllers`],
+/// [`update_contacts`], [`step_robots`], [`record_metrics`]), which run only
+/// under [`StageLayout::StageMajor`](quadsim_components::StageLayout::StageMajor).
+/// [`build_step_schedule`] gives the set its run condition, [`stage_major`];
+/// the `register_*` functions put the systems in it. A set condition is
+/// evaluated once per schedule run (at the set's first system; if false,
+/// bevy skips the whole set), where a condition on each system would be
+/// evaluated five times per step.
+#[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct StageMajorPass;
+
 /// The step schedule: the seven [`SimSystems`] chained, the built-in systems
 /// registered, ambiguity detection as an error (every data conflict must be
 /// ordered on purpose).
@@ -117,6 +131,7 @@ pub fn build_step_schedule() -> Schedule {
         )
             .chain(),
     );
+    schedule.configure_sets(StageMajorPass.run_if(stage_major));
     register_sense(&mut schedule);
     register_gait(&mut schedule);
     register_control(&mut schedule);
@@ -127,29 +142,35 @@ pub fn build_step_schedule() -> Schedule {
     schedule
 }
 
-/// Registers [`sense_robots`]: sensors, estimator, sensed state.
+/// Registers [`sense_robots`]: sensors, estimator, sensed state (in
+/// [`StageMajorPass`]).
 pub fn register_sense(schedule: &mut Schedule) {
-    schedule.add_systems(sense_robots.run_if(stage_major).in_set(SimSystems::Sense));
+    schedule.add_systems(
+        sense_robots
+            .in_set(StageMajorPass)
+            .in_set(SimSystems::Sense),
+    );
 }
 
 /// Registers the gait systems (none yet: the gait planner comes in a later issue).
 pub fn register_gait(_schedule: &mut Schedule) {}
 
-/// Registers [`run_controllers`] (joint PD; VMC comes with the walking issue).
+/// Registers [`run_controllers`] (joint PD; VMC comes with the walking issue;
+/// in [`StageMajorPass`]).
 pub fn register_control(schedule: &mut Schedule) {
     schedule.add_systems(
         run_controllers
-            .run_if(stage_major)
+            .in_set(StageMajorPass)
             .in_set(SimSystems::Control),
     );
 }
 
 /// Registers [`update_contacts`]: contact states (anchors) and observations,
-/// once per step at the step's start state.
+/// once per step at the step's start state (in [`StageMajorPass`]).
 pub fn register_contact(schedule: &mut Schedule) {
     schedule.add_systems(
         update_contacts
-            .run_if(stage_major)
+            .in_set(StageMajorPass)
             .in_set(SimSystems::Contact),
     );
 }
@@ -157,12 +178,16 @@ pub fn register_contact(schedule: &mut Schedule) {
 /// Registers the dynamics systems (none: see [`SimSystems::Dynamics`]).
 pub fn register_dynamics(_schedule: &mut Schedule) {}
 
-/// Registers [`step_robots`] then [`advance_clock`].
+/// Registers [`step_robot_blocks`] (which returns at once unless the layout is
+/// [`RobotBlocks`](quadsim_components::StageLayout::RobotBlocks), so it needs
+/// no run condition of its own: evaluating one every step costs more than
+/// the system's own check) or [`step_robots`] (in [`StageMajorPass`]), then
+/// [`advance_clock`].
 pub fn register_integrate(schedule: &mut Schedule) {
     schedule.add_systems(
         (
-            step_robot_blocks.run_if(robot_blocks),
-            step_robots.run_if(stage_major),
+            step_robot_blocks,
+            step_robots.in_set(StageMajorPass),
             advance_clock,
         )
             .chain()
@@ -170,12 +195,12 @@ pub fn register_integrate(schedule: &mut Schedule) {
     );
 }
 
-/// Registers [`record_metrics`], [`sync_link_poses`] (gated by [`pose_sync_due`])
+/// Registers [`record_metrics`] (in [`StageMajorPass`]), [`sync_link_poses`] (gated by [`pose_sync_due`])
 /// and [`log_step`] (while a [`Logger`](crate::Logger) exists, on the steps it samples or snapshots).
 pub fn register_publish(schedule: &mut Schedule) {
     schedule.add_systems(
         record_metrics
-            .run_if(stage_major)
+            .in_set(StageMajorPass)
             .in_set(SimSystems::Publish),
     );
     schedule.add_systems(

@@ -10,7 +10,9 @@ use quadsim_components::{
 use quadsim_engine::BaseKind;
 use quadsim_engine::description::RobotDescription;
 
-use crate::compile::{DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule};
+use crate::compile::{
+    CompileGate, DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule,
+};
 use crate::publish::sync_link_poses;
 use crate::schedule::build_step_schedule;
 
@@ -40,6 +42,7 @@ pub struct Simulation {
     /// The ECS world (entities and resources).
     pub world: World,
     compile: Schedule,
+    compile_gate: CompileGate,
     step: Schedule,
 }
 
@@ -70,9 +73,11 @@ impl Simulation {
         world.init_resource::<DefaultGroundPlane>();
         world.init_resource::<ControlRate>();
         world.init_resource::<quadsim_components::PayloadEvents>();
+        let compile_gate = CompileGate::new(&mut world);
         Ok(Self {
             world,
             compile: build_compile_schedule(),
+            compile_gate,
             step: build_step_schedule(),
         })
     }
@@ -106,9 +111,14 @@ impl Simulation {
         self.compile.run(&mut self.world);
     }
 
-    /// Compiles edited robots, then runs one fixed step.
+    /// Compiles edited robots, then runs one fixed step. The compile
+    /// schedule is skipped when its [`CompileGate`] sees nothing it could
+    /// act on (no edit, removal, configuration or ground change, payload
+    /// event due since the last check), the usual case between two steps.
     pub fn step(&mut self) {
-        self.compile.run(&mut self.world);
+        if self.compile_gate.due(&self.world) {
+            self.compile.run(&mut self.world);
+        }
         self.step.run(&mut self.world);
     }
 

@@ -343,3 +343,89 @@ fn joint_and_shape_edits_recompile_only_their_robot() {
     assert_eq!(mb2.inertia, m0.inertia);
     assert!(Arc::ptr_eq(&sim.robot(a).unwrap().model, &ma));
 }
+
+/// [`Simulation::step`] skips the compile schedule when its gate sees
+/// nothing to do: after a few idle steps (gate closed), every kind of edit
+/// made between two steps is still compiled before the next step: a root
+/// component changed in place, an optional part component removed, the
+/// configuration changed, a robot despawned, the default ground changed, a
+/// robot's contact model pointed elsewhere.
+#[test]
+fn edits_between_idle_steps_are_compiled_by_the_next_step() {
+    use quadsim_components::{DefaultGroundPlane, Ground, RobotBase, RobotBatch};
+    use quadsim_systems::CompileGate;
+
+    let mut sim = Simulation::new(SimConfig::default(), 1).unwrap();
+    let root = sim.spawn_robot(&pendulum()).unwrap();
+    let other = sim.spawn_robot(&pendulum()).unwrap();
+    // a second gate on the same world, to see what the simulation's sees
+    let mut gate = CompileGate::new(&mut sim.world);
+    assert!(gate.due(&sim.world), "everything is new to a new gate");
+    sim.run(3);
+    assert!(!gate.due(&sim.world), "idle steps leave nothing to compile");
+    let idle = |sim: &mut Simulation, gate: &mut CompileGate| {
+        sim.run(3);
+        assert!(!gate.due(&sim.world));
+    };
+
+    // a root component changed in place (change detection only)
+    assert_eq!(sim.robot(root).unwrap().model.nq, 9);
+    sim.world.get_mut::<RobotBase>(root).unwrap().0 = BaseKind::Fixed;
+    assert!(gate.due(&sim.world));
+    sim.step();
+    assert_eq!(sim.robot(root).unwrap().model.nq, 2);
+    idle(&mut sim, &mut gate);
+
+    // an optional part component removed (observer)
+    let upper = robot_link(&mut sim, root, "upper");
+    assert_ne!(
+        sim.world.get::<ComputedInertia>(upper).unwrap().0,
+        DMat3::ZERO
+    );
+    sim.world.entity_mut(upper).remove::<Inertia>();
+    assert!(gate.due(&sim.world));
+    sim.step();
+    assert_eq!(
+        sim.world.get::<ComputedInertia>(upper).unwrap().0,
+        DMat3::ZERO
+    );
+    idle(&mut sim, &mut gate);
+
+    // the configuration changed
+    sim.world.resource_mut::<SimConfig>().gravity = DVec3::new(0.0, 0.0, -3.7);
+    assert!(gate.due(&sim.world));
+    sim.step();
+    assert_eq!(sim.robot(root).unwrap().model.gravity.z, -3.7);
+    idle(&mut sim, &mut gate);
+
+    // the default ground changed: rebuilt and handed to every robot
+    let ground = sim.world.resource::<Ground>().0.clone();
+    sim.world.resource_mut::<DefaultGroundPlane>().set_changed();
+    assert!(gate.due(&sim.world));
+    sim.step();
+    let rebuilt = sim.world.resource::<Ground>().0.clone();
+    assert!(!Arc::ptr_eq(&ground, &rebuilt));
+    assert!(Arc::ptr_eq(
+        &sim.robot(other).unwrap().contact.terrain,
+        &rebuilt
+    ));
+    idle(&mut sim, &mut gate);
+
+    // a robot's contact model pointed elsewhere: back on the world's ground
+    sim.robot_mut(other).unwrap().contact.terrain = ground.clone();
+    assert!(gate.due(&sim.world));
+    sim.step();
+    assert!(Arc::ptr_eq(
+        &sim.robot(other).unwrap().contact.terrain,
+        &rebuilt
+    ));
+    idle(&mut sim, &mut gate);
+
+    // a robot despawned: its slot dropped, the other renumbered
+    sim.world.despawn(root);
+    assert!(gate.due(&sim.world));
+    sim.step();
+    assert_eq!(sim.world.resource::<RobotBatch>().sims.len(), 1);
+    assert_eq!(sim.world.get::<RobotIndex>(other), Some(&RobotIndex(0)));
+    idle(&mut sim, &mut gate);
+}
