@@ -28,13 +28,6 @@ pub fn stage_major(layout: Option<Res<StageLayout>>) -> bool {
     matches!(layout.as_deref(), Some(StageLayout::StageMajor))
 }
 
-/// Whether [`step_robot_blocks`] does the robots' work instead (the default;
-/// the system checks the layout itself, so the step schedule does not use
-/// this as its run condition).
-pub fn robot_blocks(layout: Option<Res<StageLayout>>) -> bool {
-    !stage_major(layout)
-}
-
 /// Runs every robot's stages of this step, block by block on the world's
 /// thread pool: for each block, in this order, `Sense`
 /// ([`sense_robot`]), `Control` ([`control_stage`]), `Contact`

@@ -25,7 +25,7 @@ mod sense;
 mod simulation;
 mod step;
 
-pub use blocks::{plan_blocks, robot_blocks, stage_major, step_robot_blocks};
+pub use blocks::{plan_blocks, stage_major, step_robot_blocks};
 pub use compile::{
     CompileGate, CompileSchedule, DirtyRobots, SharedModels, add_edit_observers,
     build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
