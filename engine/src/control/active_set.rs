@@ -132,7 +132,29 @@ impl ActiveSet {
         if n == 0 {
             return Ok(&self.x[..0]);
         }
-        self.factor(qp)?;
+        // The stance-force QP's shapes (3 variables and 6 constraints per
+        // foot) get loops of known length, which the compiler unrolls; the
+        // same operations in the same order, so the same bits as any size.
+        match (n, m) {
+            (3, 6) => self.solve_sized::<3, 6>(qp)?,
+            (6, 12) => self.solve_sized::<6, 12>(qp)?,
+            (9, 18) => self.solve_sized::<9, 18>(qp)?,
+            (12, 24) => self.solve_sized::<12, 24>(qp)?,
+            _ => self.solve_sized::<0, 0>(qp)?,
+        }
+        Ok(&self.x[..n])
+    }
+
+    /// [`Self::solve`] for `N` variables and `M` constraints (`0`: `qp.n`,
+    /// `qp.m`).
+    #[inline(always)]
+    fn solve_sized<const N: usize, const M: usize>(
+        &mut self,
+        qp: &DenseQp,
+    ) -> Result<(), ActiveSetError> {
+        let n = if N == 0 { qp.n } else { N };
+        let m = if M == 0 { qp.m } else { M };
+        self.factor::<N>(qp)?;
         // Unconstrained minimum x = −H⁻¹ g = −J Jᵀ g (J = L⁻ᵀ).
         let mut jtg = [0.0; MAX_VARS];
         for k in 0..n {
@@ -153,7 +175,7 @@ impl ActiveSet {
                 self.s[i] = dot(&qp.c[i][..n], &self.x[..n]) - qp.b[i];
             }
             let Some(p) = self.most_violated(m, qp.tolerance) else {
-                return Ok(&self.x[..n]);
+                return Ok(());
             };
             self.u[self.iq] = 0.0;
             self.active[self.iq] = p;
@@ -203,7 +225,7 @@ impl ActiveSet {
                         self.u[k] -= t * rr[k];
                     }
                     self.u[iq] += t;
-                    self.delete_constraint(n, drop.expect("t1 finite"));
+                    self.delete_constraint::<N>(n, drop.expect("t1 finite"));
                     continue;
                 }
                 for i in 0..n {
@@ -215,26 +237,27 @@ impl ActiveSet {
                 self.u[iq] += t;
                 if t2 <= t1 {
                     // Full step: p joins the active set.
-                    if self.add_constraint(n, &mut d, &mut r_norm) {
+                    if self.add_constraint::<N>(n, &mut d, &mut r_norm) {
                         self.is_active[p] = true;
                     } else {
                         // Linearly dependent on the active set within round-off:
                         // take it out again and leave it out for this solve.
-                        self.delete_constraint(n, p);
+                        self.delete_constraint::<N>(n, p);
                         self.excluded[p] = true;
                     }
                     continue 'outer;
                 }
                 // Partial step: drop the blocking constraint and retry p.
-                self.delete_constraint(n, drop.expect("t1 finite"));
+                self.delete_constraint::<N>(n, drop.expect("t1 finite"));
                 self.s[p] = dot(&qp.c[p][..n], &self.x[..n]) - qp.b[p];
             }
         }
     }
 
     /// Cholesky `H = L Lᵀ` and `J = L⁻ᵀ` (upper triangular).
-    fn factor(&mut self, qp: &DenseQp) -> Result<(), ActiveSetError> {
-        let n = qp.n;
+    #[inline(always)]
+    fn factor<const N: usize>(&mut self, qp: &DenseQp) -> Result<(), ActiveSetError> {
+        let n = if N == 0 { qp.n } else { N };
         let l = &mut self.l;
         for i in 0..n {
             for k in 0..=i {
@@ -289,7 +312,14 @@ impl ActiveSet {
     /// Adds the constraint with `d = Jᵀ n_p`: Givens rotations zero `d[iq+1..]`
     /// (applied to J's columns), then `d[..=iq]` becomes R's new column.
     /// Returns false when the constraint is linearly dependent on the active set.
-    fn add_constraint(&mut self, n: usize, d: &mut [f64; MAX_VARS], r_norm: &mut f64) -> bool {
+    #[inline(always)]
+    fn add_constraint<const N: usize>(
+        &mut self,
+        n: usize,
+        d: &mut [f64; MAX_VARS],
+        r_norm: &mut f64,
+    ) -> bool {
+        let n = if N == 0 { n } else { N };
         let iq = self.iq;
         for jj in (iq + 1..n).rev() {
             let (mut cc, mut ss) = (d[jj - 1], d[jj]);
@@ -328,7 +358,9 @@ impl ActiveSet {
 
     /// Removes active constraint `l` (its multiplier and R column) and
     /// restores R's triangle with Givens rotations (applied to J's columns).
-    fn delete_constraint(&mut self, n: usize, l: usize) {
+    #[inline(always)]
+    fn delete_constraint<const N: usize>(&mut self, n: usize, l: usize) {
+        let n = if N == 0 { n } else { N };
         let iq = self.iq;
         let qq = (0..iq).find(|&i| self.active[i] == l).expect("l is active");
         self.is_active[l] = false;
@@ -439,6 +471,64 @@ mod tests {
         let lam = (qp.b[0] - (a[0] * p[0] + a[1] * p[1])) / 5.0;
         assert!((x[0] - (p[0] + lam * a[0])).abs() < 1e-14);
         assert!((x[1] - (p[1] + lam * a[1])).abs() < 1e-14);
+    }
+
+    /// The fixed-size paths of the stance-force QP's shapes give the bits of
+    /// the general one: random problems of that shape (1 to 4 blocks of 3
+    /// variables, 6 constraint rows each over its own block, a dense SPD
+    /// Hessian) solved both ways have the same minimiser bits, errors and
+    /// iteration counts.
+    #[test]
+    fn sized_paths_give_the_general_bits() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let (mut solved, mut iterations) = (0, 0);
+        for trial in 0..2000 {
+            let k = 1 + trial % 4;
+            let (n, m) = (3 * k, 6 * k);
+            let mut qp = DenseQp {
+                n,
+                m,
+                ..DenseQp::default()
+            };
+            // H = AᵀA + αI with a random 6 × n map A (as the wrench map)
+            let a: Vec<[f64; MAX_VARS]> = (0..6)
+                .map(|_| std::array::from_fn(|_| rng.random_range(-1.0..1.0)))
+                .collect();
+            let alpha = 10f64.powf(rng.random_range(-4.0..0.0));
+            for i in 0..n {
+                for j in 0..n {
+                    qp.h[i][j] = a.iter().map(|r| r[i] * r[j]).sum::<f64>();
+                }
+                qp.h[i][i] += alpha;
+                qp.g[i] = rng.random_range(-50.0..50.0);
+            }
+            for f in 0..k {
+                for r in 0..6 {
+                    for c in 0..3 {
+                        qp.c[6 * f + r][3 * f + c] = rng.random_range(-1.0..1.0);
+                    }
+                    qp.b[6 * f + r] = rng.random_range(-2.0..3.0);
+                }
+            }
+            let (mut sized, mut general) = (ActiveSet::default(), ActiveSet::default());
+            let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            let r1 = sized.solve(&qp).map(bits);
+            let r2 = general
+                .solve_sized::<0, 0>(&qp)
+                .map(|()| bits(&general.x[..n]));
+            assert_eq!(r1, r2, "trial {trial}");
+            assert_eq!(sized.iterations, general.iterations, "trial {trial}");
+            if r1.is_ok() {
+                solved += 1;
+                iterations += sized.iterations;
+            }
+        }
+        // the problems exercise the active-set iterations, not only x = −H⁻¹g
+        assert!(
+            solved > 500 && iterations > 5 * solved,
+            "{solved} solved, {iterations} iterations"
+        );
     }
 
     #[test]
