@@ -17,7 +17,7 @@ use quadsim_engine::control::force_qp::{
 };
 use quadsim_engine::control::vmc::{Vmc, VmcCommand, VmcInput, VmcParams};
 use quadsim_engine::integrate::{Integrator, State, StepWorkspace, step};
-use quadsim_engine::jacobian::add_point_force_jt;
+use quadsim_engine::jacobian::{add_point_force_jt, point_jacobian};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::model::{BaseKind, Model};
 use quadsim_engine::nle::generalized_gravity;
@@ -662,6 +662,20 @@ fn stance_torques_hold_the_robot_statically() {
     for j in 0..nj {
         assert!((tau_j[j] - jtf[6 + j]).abs() < 1e-10);
     }
+    // bit for bit the dense −Jᵀ f over every joint column of `point_jacobian`
+    let nv = model.nv;
+    let mut dense = vec![0.0; nj];
+    for (&(body, p), fi) in pts.iter().zip(&f) {
+        let jac = point_jacobian(&model, &mut data, body, p);
+        for c in 6..nv {
+            dense[c - 6] -= jac[c] * fi.x + jac[nv + c] * fi.y + jac[2 * nv + c] * fi.z;
+        }
+    }
+    for (d, lim) in dense.iter_mut().zip(&model.effort_limit[6..]) {
+        *d = d.clamp(-lim, *lim);
+    }
+    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&tau_j), bits(&dense));
     let grav = generalized_gravity(&model, &mut data, &q).to_vec();
     let mut residual = |sign: f64| {
         forward_kinematics(&model, &mut data, &q, &v);

@@ -38,8 +38,9 @@
 
 use crate::control::active_set::{ActiveSet, ActiveSetError, DenseQp};
 use crate::data::Data;
+#[cfg(doc)]
 use crate::jacobian::point_jacobian;
-use crate::model::Model;
+use crate::model::{JointType, Model, NO_PARENT};
 use crate::spatial::{Force, skew};
 use glam::{DMat3, DVec3};
 
@@ -497,7 +498,12 @@ pub fn solve_clarabel(
 /// [`point_jacobian`] of the contact point: with `M q̈ + h = τ + Jᵀ f_ext` and
 /// `f_ext` the ground's force on the foot, the leg pushes the ground with
 /// `−f` so that the ground pushes back with `f`. Needs kinematics at the
-/// current state in `data`; overwrites `data.jacobian`.
+/// current state in `data`. Each foot's `Jᵀ f` is summed over its own
+/// chain's columns only (the joints from its body to the base), without
+/// forming `J`: the other columns of `J` are exact zeros, whose products
+/// would leave the sums unchanged (the torques start at `+0` and never
+/// become `−0`), so the bits are those of the dense product (a unit test
+/// checks them against [`point_jacobian`]).
 ///
 /// The legs' own weight is not in `τ`; add the joint rows of
 /// [`crate::nle::generalized_gravity`] for a static hold (`τ = g(q) − Jᵀ f`,
@@ -516,9 +522,15 @@ pub fn stance_torques(
     debug_assert_eq!(tau_joints.len(), nv - b);
     tau_joints.fill(0.0);
     for (&(body, point), f) in feet.iter().zip(forces) {
-        let j = point_jacobian(model, data, body, point);
-        for c in b..nv {
-            tau_joints[c - b] -= j[c] * f.x + j[nv + c] * f.y + j[2 * nv + c] * f.z;
+        // `point_jacobian`'s nonzero joint columns, in its arithmetic
+        let r = point - data.origin;
+        let mut j = body;
+        while j != NO_PARENT {
+            if !matches!(model.joint_type[j], JointType::Free | JointType::Anchored) {
+                let c = data.s[j].point_velocity(r);
+                tau_joints[model.idx_v[j] - b] -= c.x * f.x + c.y * f.y + c.z * f.z;
+            }
+            j = model.parent[j];
         }
     }
     for (t, lim) in tau_joints.iter_mut().zip(&model.effort_limit[b..]) {
