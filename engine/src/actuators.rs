@@ -100,23 +100,37 @@ impl ActuatorStats {
     /// speeds `qd` (joint order). Extra or missing entries are ignored.
     pub fn record(&mut self, tau_cmd: &[f64], qd: &[f64], dt_s: f64) {
         self.time_s += dt_s;
-        for j in 0..self.effort_limit.len().min(tau_cmd.len()) {
-            let lim = self.effort_limit[j];
+        // every per-joint list as a slice of one length, so that the loop
+        // indexes without bounds checks
+        let n = self.effort_limit.len().min(tau_cmd.len());
+        let (effort, velocity) = (&self.effort_limit[..n], &self.velocity_limit[..n]);
+        let (peak_torque, peak_demand) = (
+            &mut self.peak_abs_torque[..n],
+            &mut self.peak_abs_demand[..n],
+        );
+        let (at_torque_s, at_speed_s) = (
+            &mut self.at_torque_limit_s[..n],
+            &mut self.at_speed_limit_s[..n],
+        );
+        let (torque_hits, speed_hits) = (&mut self.torque_hits[..n], &mut self.speed_hits[..n]);
+        let (was_at, tau_cmd) = (&mut self.was_at[..n], &tau_cmd[..n]);
+        for j in 0..n {
+            let lim = effort[j];
             let t = tau_cmd[j].abs();
-            self.peak_abs_torque[j] = self.peak_abs_torque[j].max(t.min(lim));
-            self.peak_abs_demand[j] = self.peak_abs_demand[j].max(t);
+            peak_torque[j] = peak_torque[j].max(t.min(lim));
+            peak_demand[j] = peak_demand[j].max(t);
             let at_torque = t >= lim;
             if at_torque {
-                self.at_torque_limit_s[j] += dt_s;
-                self.torque_hits[j] += u64::from(!self.was_at[j][0]);
+                at_torque_s[j] += dt_s;
+                torque_hits[j] += u64::from(!was_at[j][0]);
             }
-            let at_speed = qd.get(j).is_some_and(|v| v.abs() >= self.velocity_limit[j]);
+            let at_speed = qd.get(j).is_some_and(|v| v.abs() >= velocity[j]);
             if at_speed {
-                self.at_speed_limit_s[j] += dt_s;
-                self.speed_hits[j] += u64::from(!self.was_at[j][1]);
+                at_speed_s[j] += dt_s;
+                speed_hits[j] += u64::from(!was_at[j][1]);
             }
-            self.was_at[j][0] = at_torque;
-            self.was_at[j][1] = at_speed;
+            was_at[j][0] = at_torque;
+            was_at[j][1] = at_speed;
         }
     }
 
