@@ -211,12 +211,13 @@ fn quad16_trot_at_three_quarters_with_foot_press_survives_round_off_sized_pertur
 }
 
 /// The default trot at 0.75 m/s is not robust to round-off: its nominal start
-/// holds, but 11 of 41 starts perturbed by ±1e-9 in one coordinate fall
-/// (the sparse force-QP solver or libm's sin/cos tip the nominal start
-/// over). See `WalkerParams::stance_foot_press` for the diagnosis and why
-/// the fix is not the default.
+/// holds, but 11 of 41 starts perturbed by ±1e-9 in one coordinate fall,
+/// and 18 (glibc's sin/cos) or 23 (libm's, the default since 2026-11-26)
+/// of another 41 moved by up to 7e-9 m (`docs/walking.md`, "Round-off
+/// sensitivity"). See `WalkerParams::stance_foot_press` for the diagnosis
+/// and why the fix is not the default.
 #[test]
-#[ignore = "not reached: the default 0.75 m/s trot falls from about 1 in 4 perturbed starts"]
+#[ignore = "not reached: the default 0.75 m/s trot falls from a quarter to a half of perturbed starts"]
 fn quad16_trot_at_three_quarters_survives_round_off_sized_perturbations() {
     three_quarters_from_perturbed_starts(|_| {});
 }
