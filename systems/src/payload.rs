@@ -8,20 +8,28 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::relationship::RelationshipTarget;
 use quadsim_components::{
-    BelongsTo, Controller, JointConnection, Link, PayloadAction, PayloadEvents, RobotBatch,
-    RobotParts, SimClock, spawn_joint, spawn_link,
+    BelongsTo, Controller, JointConnection, Link, PayloadAction, PayloadEvent, PayloadEvents,
+    RobotBatch, RobotParts, SimClock, spawn_joint, spawn_link,
 };
 
 /// Half a step's worth of slack on event times (s): an event at t is applied
 /// before the step that starts at t, whatever the rounding of the clock.
 const TIME_SLACK_S: f64 = 1e-9;
 
-/// Whether a payload event is due at `now_s` (what
-/// [`apply_payload_events`] would apply).
+/// The events not yet applied whose time has come at `now_s` (what
+/// [`apply_payload_events`] applies), in order.
+fn due_events(events: &PayloadEvents, now_s: f64) -> &[PayloadEvent] {
+    let pending = &events.events[events.applied..];
+    let n = pending
+        .iter()
+        .take_while(|e| e.t_s <= now_s + TIME_SLACK_S)
+        .count();
+    &pending[..n]
+}
+
+/// Whether a payload event is due at `now_s` ([`CompileGate`](crate::CompileGate)).
 pub(crate) fn payload_due(events: &PayloadEvents, now_s: f64) -> bool {
-    events.events[events.applied..]
-        .first()
-        .is_some_and(|e| e.t_s <= now_s + TIME_SLACK_S)
+    !due_events(events, now_s).is_empty()
 }
 
 /// The compile stage's first system: applies every payload event due at
@@ -32,11 +40,7 @@ pub fn apply_payload_events(world: &mut World) {
         return;
     };
     let now = world.resource::<SimClock>().time_s;
-    let due: Vec<_> = events.events[events.applied..]
-        .iter()
-        .take_while(|e| e.t_s <= now + TIME_SLACK_S)
-        .cloned()
-        .collect();
+    let due = due_events(events, now).to_vec();
     if due.is_empty() {
         return;
     }
