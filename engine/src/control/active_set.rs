@@ -152,8 +152,8 @@ impl ActiveSet {
         &mut self,
         qp: &DenseQp,
     ) -> Result<(), ActiveSetError> {
-        let n = if N == 0 { qp.n } else { N };
-        let m = if M == 0 { qp.m } else { M };
+        let n = size::<N>(qp.n);
+        let m = size::<M>(qp.m);
         self.factor::<N>(qp)?;
         // Unconstrained minimum x = −H⁻¹ g = −J Jᵀ g (J = L⁻ᵀ).
         let mut jtg = [0.0; MAX_VARS];
@@ -257,7 +257,7 @@ impl ActiveSet {
     /// Cholesky `H = L Lᵀ` and `J = L⁻ᵀ` (upper triangular).
     #[inline(always)]
     fn factor<const N: usize>(&mut self, qp: &DenseQp) -> Result<(), ActiveSetError> {
-        let n = if N == 0 { qp.n } else { N };
+        let n = size::<N>(qp.n);
         let l = &mut self.l;
         for i in 0..n {
             for k in 0..=i {
@@ -319,7 +319,7 @@ impl ActiveSet {
         d: &mut [f64; MAX_VARS],
         r_norm: &mut f64,
     ) -> bool {
-        let n = if N == 0 { n } else { N };
+        let n = size::<N>(n);
         let iq = self.iq;
         for jj in (iq + 1..n).rev() {
             let (mut cc, mut ss) = (d[jj - 1], d[jj]);
@@ -360,7 +360,7 @@ impl ActiveSet {
     /// restores R's triangle with Givens rotations (applied to J's columns).
     #[inline(always)]
     fn delete_constraint<const N: usize>(&mut self, n: usize, l: usize) {
-        let n = if N == 0 { n } else { N };
+        let n = size::<N>(n);
         let iq = self.iq;
         let qq = (0..iq).find(|&i| self.active[i] == l).expect("l is active");
         self.is_active[l] = false;
@@ -414,6 +414,13 @@ impl ActiveSet {
             }
         }
     }
+}
+
+/// A size known at compile time (`N > 0`) or given at run time (`N == 0`):
+/// [`ActiveSet::solve`]'s fixed-size paths and its general one share one body.
+#[inline(always)]
+fn size<const N: usize>(runtime: usize) -> usize {
+    if N == 0 { runtime } else { N }
 }
 
 #[inline]
