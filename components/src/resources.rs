@@ -222,8 +222,10 @@ pub struct RobotSim {
     /// The compiled articulation (shared, immutable; replaced on recompile).
     pub model: Arc<Model>,
     /// Kinematics/dynamics workspace; after a step it holds the last
-    /// derivative evaluation, not the new state.
-    pub data: Data,
+    /// derivative evaluation, not the new state, unless the step lent the
+    /// robot a thread's workspace ([`Data::with_block_workspaces`]; boxed so
+    /// that lending it exchanges a pointer).
+    pub data: Box<Data>,
     /// Generalised position and velocity (Pinocchio conventions, nq and nv).
     pub state: State,
     /// Actuator torque command (N·m or N, nv; base entries normally zero),
@@ -301,7 +303,7 @@ impl RobotSim {
         workspace.passive = passive;
         Self {
             entity,
-            data: Data::new(&model),
+            data: Box::new(Data::new(&model)),
             state: State::neutral(&model),
             tau_actuator: vec![0.0; model.nv],
             workspace,
