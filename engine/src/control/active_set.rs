@@ -14,6 +14,8 @@
 //! stance-force QP of [`super::force_qp`] (3 variables and 6 constraints per
 //! foot, up to 4 feet), where it is checked against `clarabel`.
 
+use multiversion::multiversion;
+
 /// Most variables a problem may have.
 pub const MAX_VARS: usize = 12;
 /// Most inequality constraints a problem may have.
@@ -71,24 +73,28 @@ impl Default for DenseQp {
 }
 
 /// The solver's workspace (all on the stack, reused between solves).
+///
+/// `L` and `J` are stored by columns (`lc[p][i] = L[i][p]`, `jt[k][i] =
+/// J[i][k]`): the factorisation's updates, the Givens rotations (which mix
+/// two columns of `J`) and `z = J₂ d₂` then run along contiguous rows, where
+/// the compiler packs independent lanes into SIMD registers.
 #[derive(Clone, Debug)]
 pub struct ActiveSet {
-    /// Lower Cholesky factor of `H`.
-    l: [[f64; MAX_VARS]; MAX_VARS],
-    /// `J = L⁻ᵀ Q` (columns `0..iq` span the active constraints' image).
-    j: [[f64; MAX_VARS]; MAX_VARS],
+    /// Lower Cholesky factor of `H`, by columns: `lc[p][i] = L[i][p]` (`i ≥ p`;
+    /// the other entries are stale and never read for a result).
+    lc: [[f64; MAX_VARS]; MAX_VARS],
+    /// `Jᵀ` with `J = L⁻ᵀ Q`: row `k` is column `k` of `J` (columns `0..iq`
+    /// span the active constraints' image).
+    jt: [[f64; MAX_VARS]; MAX_VARS],
     /// Upper-triangular `R` (first `iq` columns used).
     r: [[f64; MAX_VARS]; MAX_VARS],
     /// Active constraint indices, in order of addition (`iq` of them).
     active: [usize; MAX_VARS + 1],
     /// Lagrange multipliers of the active constraints (and the one being added at `iq`).
     u: [f64; MAX_VARS + 1],
-    /// Whether each constraint is in the active set.
-    is_active: [bool; MAX_CONSTRAINTS],
-    /// Constraints found linearly dependent on the active set this solve.
-    excluded: [bool; MAX_CONSTRAINTS],
-    /// Constraint values `cᵢᵀ x − bᵢ`.
-    s: [f64; MAX_CONSTRAINTS],
+    /// Whether each constraint is in the active set or was found linearly
+    /// dependent on it this solve (either way not a candidate to add).
+    blocked: [bool; MAX_CONSTRAINTS],
     /// Solution.
     x: [f64; MAX_VARS],
     /// Active-set size.
@@ -100,14 +106,12 @@ pub struct ActiveSet {
 impl Default for ActiveSet {
     fn default() -> Self {
         ActiveSet {
-            l: [[0.0; MAX_VARS]; MAX_VARS],
-            j: [[0.0; MAX_VARS]; MAX_VARS],
+            lc: [[0.0; MAX_VARS]; MAX_VARS],
+            jt: [[0.0; MAX_VARS]; MAX_VARS],
             r: [[0.0; MAX_VARS]; MAX_VARS],
             active: [0; MAX_VARS + 1],
             u: [0.0; MAX_VARS + 1],
-            is_active: [false; MAX_CONSTRAINTS],
-            excluded: [false; MAX_CONSTRAINTS],
-            s: [0.0; MAX_CONSTRAINTS],
+            blocked: [false; MAX_CONSTRAINTS],
             x: [0.0; MAX_VARS],
             iq: 0,
             iterations: 0,
@@ -132,16 +136,7 @@ impl ActiveSet {
         if n == 0 {
             return Ok(&self.x[..0]);
         }
-        // The stance-force QP's shapes (3 variables and 6 constraints per
-        // foot) get loops of known length, which the compiler unrolls; the
-        // same operations in the same order, so the same bits as any size.
-        match (n, m) {
-            (3, 6) => self.solve_sized::<3, 6>(qp)?,
-            (6, 12) => self.solve_sized::<6, 12>(qp)?,
-            (9, 18) => self.solve_sized::<9, 18>(qp)?,
-            (12, 24) => self.solve_sized::<12, 24>(qp)?,
-            _ => self.solve_sized::<0, 0>(qp)?,
-        }
+        solve_dispatch(self, qp)?;
         Ok(&self.x[..n])
     }
 
@@ -155,31 +150,51 @@ impl ActiveSet {
         let n = size::<N>(qp.n);
         let m = size::<M>(qp.m);
         self.factor::<N>(qp)?;
-        // Unconstrained minimum x = −H⁻¹ g = −J Jᵀ g (J = L⁻ᵀ).
+        // Unconstrained minimum x = −H⁻¹ g = −J Jᵀ g (J = L⁻ᵀ, upper triangular):
+        // jtg[k] = Σ_{i≤k} J[i][k] g[i], then x[i] = −Σ_{k≥i} J[i][k] jtg[k],
+        // the latter summed along the rows of Jᵀ (each x[i] its own sum from
+        // −0.0, over k in ascending order).
         let mut jtg = [0.0; MAX_VARS];
         for k in 0..n {
-            jtg[k] = (0..=k).map(|i| self.j[i][k] * qp.g[i]).sum();
+            jtg[k] = dot(&self.jt[k][..=k], &qp.g[..=k]);
         }
-        for i in 0..n {
-            self.x[i] = -(i..n).map(|k| self.j[i][k] * jtg[k]).sum::<f64>();
+        let mut xs = [-0.0; MAX_VARS];
+        for k in 0..n {
+            let (col, w) = (&self.jt[k][..=k], jtg[k]);
+            for (acc, &j) in xs.iter_mut().zip(col) {
+                *acc += j * w;
+            }
+        }
+        for (x, acc) in self.x[..n].iter_mut().zip(&xs) {
+            *x = -*acc;
         }
         self.iq = 0;
-        self.is_active[..m].fill(false);
-        self.excluded[..m].fill(false);
+        self.blocked[..m].fill(false);
         let mut r_norm = 1.0f64;
         let max_iter = 20 * (n + m);
-        let (mut d, mut z, mut rr) = ([0.0; MAX_VARS], [0.0; MAX_VARS], [0.0; MAX_VARS + 1]);
+        let (mut d, mut rr) = ([0.0; MAX_VARS], [0.0; MAX_VARS + 1]);
         'outer: loop {
-            // Step 1: constraint values; pick the most violated one.
+            // Step 1: the most violated constraint (values `cᵢᵀ x − bᵢ` of
+            // those that may be added).
+            let mut worst = -qp.tolerance;
+            let mut candidate = None;
             for i in 0..m {
-                self.s[i] = dot(&qp.c[i][..n], &self.x[..n]) - qp.b[i];
+                if !self.blocked[i] {
+                    let s = dot(&qp.c[i][..n], &self.x[..n]) - qp.b[i];
+                    if s < worst {
+                        worst = s;
+                        candidate = Some(i);
+                    }
+                }
             }
-            let Some(p) = self.most_violated(m, qp.tolerance) else {
+            let Some(p) = candidate else {
                 return Ok(());
             };
+            // its value, updated after partial steps
+            let mut s_p = worst;
             self.u[self.iq] = 0.0;
             self.active[self.iq] = p;
-            let np = &qp.c[p];
+            let np = &qp.c[p][..n];
             loop {
                 self.iterations += 1;
                 if self.iterations > max_iter {
@@ -188,11 +203,17 @@ impl ActiveSet {
                 // Step 2a: d = Jᵀ n_p; primal direction z = J₂ d₂; dual r = R⁻¹ d₁.
                 let iq = self.iq;
                 for k in 0..n {
-                    d[k] = (0..n).map(|i| self.j[i][k] * np[i]).sum();
+                    d[k] = dot(&self.jt[k][..n], np);
                 }
-                for i in 0..n {
-                    z[i] = (iq..n).map(|k| self.j[i][k] * d[k]).sum();
+                // z[i] = Σ_{k≥iq} J[i][k] d[k], summed along the rows of Jᵀ
+                let mut z = [-0.0; MAX_VARS];
+                for k in iq..n {
+                    let (col, w) = (&self.jt[k][..n], d[k]);
+                    for (acc, &j) in z.iter_mut().zip(col) {
+                        *acc += j * w;
+                    }
                 }
+                let z = &z[..n];
                 for i in (0..iq).rev() {
                     let mut sum = d[i];
                     for k in i + 1..iq {
@@ -209,9 +230,9 @@ impl ActiveSet {
                         drop = Some(self.active[k]);
                     }
                 }
-                let znp = dot(&z[..n], &np[..n]);
-                let t2 = if dot(&z[..n], &z[..n]) > f64::EPSILON * f64::EPSILON {
-                    -self.s[p] / znp
+                let znp = dot(z, np);
+                let t2 = if dot(z, z) > f64::EPSILON * f64::EPSILON {
+                    -s_p / znp
                 } else {
                     f64::INFINITY
                 };
@@ -228,8 +249,8 @@ impl ActiveSet {
                     self.delete_constraint::<N>(n, drop.expect("t1 finite"));
                     continue;
                 }
-                for i in 0..n {
-                    self.x[i] += t * z[i];
+                for (x, &zi) in self.x[..n].iter_mut().zip(z) {
+                    *x += t * zi;
                 }
                 for k in 0..iq {
                     self.u[k] -= t * rr[k];
@@ -238,75 +259,66 @@ impl ActiveSet {
                 if t2 <= t1 {
                     // Full step: p joins the active set.
                     if self.add_constraint::<N>(n, &mut d, &mut r_norm) {
-                        self.is_active[p] = true;
+                        self.blocked[p] = true;
                     } else {
                         // Linearly dependent on the active set within round-off:
                         // take it out again and leave it out for this solve.
                         self.delete_constraint::<N>(n, p);
-                        self.excluded[p] = true;
+                        self.blocked[p] = true;
                     }
                     continue 'outer;
                 }
                 // Partial step: drop the blocking constraint and retry p.
                 self.delete_constraint::<N>(n, drop.expect("t1 finite"));
-                self.s[p] = dot(&qp.c[p][..n], &self.x[..n]) - qp.b[p];
+                s_p = dot(np, &self.x[..n]) - qp.b[p];
             }
         }
     }
 
-    /// Cholesky `H = L Lᵀ` and `J = L⁻ᵀ` (upper triangular).
+    /// Cholesky `H = L Lᵀ` and `J = L⁻ᵀ` (upper triangular), a row of `L`
+    /// and of `L⁻¹` (a column of `J`) at a time.
+    ///
+    /// Row `i`: `L[i][k] = (H[i][k] − Σ_{p<k} L[i][p] L[k][p]) / L[k][k]` and
+    /// `L⁻¹[i][c] = (δᵢ꜀ − Σ_{c≤p<i} L[i][p] L⁻¹[p][c]) / L[i][i]`, each sum
+    /// in ascending `p`. Both are accumulated along the row, a step `p` at a
+    /// time over all lanes: the lanes `k ≤ p` of the first are spent and those
+    /// past `i` unused, and in the second the lanes `c > p` see
+    /// `L⁻¹[p][c] = +0`, which leaves their `+0` or `1` unchanged (`L[i][p]`
+    /// is finite whenever the factorisation succeeds: otherwise the diagonal
+    /// is not finite).
     #[inline(always)]
     fn factor<const N: usize>(&mut self, qp: &DenseQp) -> Result<(), ActiveSetError> {
         let n = size::<N>(qp.n);
-        let l = &mut self.l;
         for i in 0..n {
-            for k in 0..=i {
-                let mut sum = qp.h[i][k];
-                for p in 0..k {
-                    sum -= l[i][p] * l[k][p];
+            let mut acc = [0.0; MAX_VARS];
+            acc[..n].copy_from_slice(&qp.h[i][..n]);
+            let mut inv = [0.0; MAX_VARS];
+            inv[i] = 1.0;
+            for p in 0..i {
+                let lip = acc[p] / self.lc[p][p];
+                self.lc[p][i] = lip;
+                for (a, &l) in acc[..n].iter_mut().zip(&self.lc[p][..n]) {
+                    *a -= lip * l;
                 }
-                if i == k {
-                    if sum <= 0.0 || !sum.is_finite() {
-                        return Err(ActiveSetError::NotPositiveDefinite);
-                    }
-                    l[i][i] = sum.sqrt();
-                } else {
-                    l[i][k] = sum / l[k][k];
+                for (v, &j) in inv[..n].iter_mut().zip(&self.jt[p][..n]) {
+                    *v -= lip * j;
                 }
             }
-        }
-        // L⁻¹ by forward substitution (lower), then J = (L⁻¹)ᵀ.
-        for c in 0..n {
-            for i in 0..n {
-                self.j[i][c] = 0.0;
+            let sum = acc[i];
+            if sum <= 0.0 || !sum.is_finite() {
+                return Err(ActiveSetError::NotPositiveDefinite);
             }
-        }
-        for c in 0..n {
-            // column c of L⁻¹: solve L y = e_c; y[i] = 0 for i < c.
-            for i in c..n {
-                let mut sum = if i == c { 1.0 } else { 0.0 };
-                for p in c..i {
-                    sum -= l[i][p] * self.j[c][p];
-                }
-                self.j[c][i] = sum / l[i][i];
+            let lii = sum.sqrt();
+            self.lc[i][i] = lii;
+            let row = &mut self.jt[i][..n];
+            for (c, (j, &v)) in row.iter_mut().zip(&inv).enumerate() {
+                *j = if c <= i { v / lii } else { 0.0 };
             }
         }
         for row in self.r.iter_mut().take(n) {
             row[..n].fill(0.0);
         }
         Ok(())
-    }
-
-    fn most_violated(&self, m: usize, tol: f64) -> Option<usize> {
-        let mut worst = -tol;
-        let mut p = None;
-        for i in 0..m {
-            if !self.is_active[i] && !self.excluded[i] && self.s[i] < worst {
-                worst = self.s[i];
-                p = Some(i);
-            }
-        }
-        p
     }
 
     /// Adds the constraint with `d = Jᵀ n_p`: Givens rotations zero `d[iq+1..]`
@@ -338,11 +350,12 @@ impl ActiveSet {
                 d[jj - 1] = h;
             }
             let xny = ss / (1.0 + cc);
-            for k in 0..n {
-                let t1 = self.j[k][jj - 1];
-                let t2 = self.j[k][jj];
-                self.j[k][jj - 1] = t1 * cc + t2 * ss;
-                self.j[k][jj] = xny * (t1 + self.j[k][jj - 1]) - t2;
+            let (head, tail) = self.jt.split_at_mut(jj);
+            let (a, b) = (&mut head[jj - 1][..n], &mut tail[0][..n]);
+            for (ja, jb) in a.iter_mut().zip(b.iter_mut()) {
+                let (t1, t2) = (*ja, *jb);
+                *ja = t1 * cc + t2 * ss;
+                *jb = xny * (t1 + *ja) - t2;
             }
         }
         self.iq += 1;
@@ -363,7 +376,7 @@ impl ActiveSet {
         let n = size::<N>(n);
         let iq = self.iq;
         let qq = (0..iq).find(|&i| self.active[i] == l).expect("l is active");
-        self.is_active[l] = false;
+        self.blocked[l] = false;
         for i in qq..iq - 1 {
             self.active[i] = self.active[i + 1];
             self.u[i] = self.u[i + 1];
@@ -406,13 +419,33 @@ impl ActiveSet {
                 self.r[jj][k] = t1 * cc + t2 * ss;
                 self.r[jj + 1][k] = xny * (t1 + self.r[jj][k]) - t2;
             }
-            for k in 0..n {
-                let t1 = self.j[k][jj];
-                let t2 = self.j[k][jj + 1];
-                self.j[k][jj] = t1 * cc + t2 * ss;
-                self.j[k][jj + 1] = xny * (self.j[k][jj] + t1) - t2;
+            let (head, tail) = self.jt.split_at_mut(jj + 1);
+            let (a, b) = (&mut head[jj][..n], &mut tail[0][..n]);
+            for (ja, jb) in a.iter_mut().zip(b.iter_mut()) {
+                let (t1, t2) = (*ja, *jb);
+                *ja = t1 * cc + t2 * ss;
+                *jb = xny * (*ja + t1) - t2;
             }
         }
+    }
+}
+
+/// [`ActiveSet::solve`] past its checks, compiled for x86-64-v3 (AVX2, FMA)
+/// and the generic target with the CPU's choice at the first call; the same
+/// bits either way (Rust never fuses `a * b + c`: the wider target packs
+/// independent lanes, four to a register).
+///
+/// The stance-force QP's shapes (3 variables and 6 constraints per foot)
+/// get loops of known length, which the compiler unrolls; the same
+/// operations in the same order, so the same bits as any size.
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn solve_dispatch(s: &mut ActiveSet, qp: &DenseQp) -> Result<(), ActiveSetError> {
+    match (qp.n, qp.m) {
+        (3, 6) => s.solve_sized::<3, 6>(qp),
+        (6, 12) => s.solve_sized::<6, 12>(qp),
+        (9, 18) => s.solve_sized::<9, 18>(qp),
+        (12, 24) => s.solve_sized::<12, 24>(qp),
+        _ => s.solve_sized::<0, 0>(qp),
     }
 }
 
@@ -423,7 +456,8 @@ fn size<const N: usize>(runtime: usize) -> usize {
     if N == 0 { runtime } else { N }
 }
 
-#[inline]
+/// `Σ aᵢ bᵢ` in index order from `−0.0` (as `Iterator::sum`).
+#[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -484,7 +518,9 @@ mod tests {
     /// the general one: random problems of that shape (1 to 4 blocks of 3
     /// variables, 6 constraint rows each over its own block, a dense SPD
     /// Hessian) solved both ways have the same minimiser bits, errors and
-    /// iteration counts.
+    /// iteration counts. The sized solves run in a workspace filled with NaN
+    /// first: no result depends on what a previous solve left (the
+    /// factorisation's unused lanes included).
     #[test]
     fn sized_paths_give_the_general_bits() {
         use rand::{Rng, SeedableRng};
@@ -519,6 +555,9 @@ mod tests {
                 }
             }
             let (mut sized, mut general) = (ActiveSet::default(), ActiveSet::default());
+            let nan = [[f64::NAN; MAX_VARS]; MAX_VARS];
+            (sized.lc, sized.jt, sized.r) = (nan, nan, nan);
+            (sized.u, sized.x) = ([f64::NAN; MAX_VARS + 1], [f64::NAN; MAX_VARS]);
             let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
             let r1 = sized.solve(&qp).map(bits);
             let r2 = general
