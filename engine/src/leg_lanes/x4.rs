@@ -678,11 +678,14 @@ impl Sym6x4 {
     #[inline(always)]
     pub fn lanes(&self) -> [Sym6; 4] {
         let (m, h, i) = (self.m.lanes(), self.h.lanes(), self.i.lanes());
-        [0, 1, 2, 3].map(|k| Sym6 {
+        // written out: `[0, 1, 2, 3].map(..)` goes through `array::try_map`,
+        // which codegen-unit splits can leave out of line in ABA's hot loop
+        let lane = |k: usize| Sym6 {
             m: m[k],
             h: h[k],
             i: i[k],
-        })
+        };
+        [lane(0), lane(1), lane(2), lane(3)]
     }
 
     /// `self + o`, block by block.
