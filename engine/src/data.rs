@@ -139,15 +139,40 @@ impl Data {
     /// on which thread or robot used the spare before (every field a
     /// computation reads it writes first, as with a fresh `Data`).
     pub fn with_spare<R>(model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
-        let taken = SPARE_DATA.with(|cell| {
+        Self::with_pooled(&SPARE_DATA, model, true, f)
+    }
+
+    /// [`Self::with_spare`] for a kinematics-only workspace
+    /// ([`Self::for_kinematics`]): a state estimator's leg kinematics, which
+    /// nothing reads after the update that computes them, so that they need
+    /// not live (and be fetched from memory) in every robot.
+    pub fn with_kinematics_spare<R>(model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
+        Self::with_pooled(&SPARE_KINEMATICS, model, false, f)
+    }
+
+    /// A spare of `pool` (full workspaces when `dynamics`, else
+    /// kinematics-only) fitted to `model`, its cache cleared, lent to `f`.
+    fn with_pooled<R>(
+        pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<Data>>>,
+        model: &Model,
+        dynamics: bool,
+        f: impl FnOnce(&mut Data) -> R,
+    ) -> R {
+        let taken = pool.with(|cell| {
             let mut spares = cell.borrow_mut();
-            let i = spares.iter().position(|d| d.fits(model))?;
+            let i = spares.iter().position(|d| d.fits_as(model, dynamics))?;
             Some(spares.swap_remove(i))
         });
-        let mut data = taken.unwrap_or_else(|| Data::new(model));
+        let mut data = taken.unwrap_or_else(|| {
+            if dynamics {
+                Data::new(model)
+            } else {
+                Data::for_kinematics(model)
+            }
+        });
         data.kin.level = 0;
         let result = f(&mut data);
-        SPARE_DATA.with(|cell| {
+        pool.with(|cell| {
             let mut spares = cell.borrow_mut();
             // one per shape in use; a thread that meets many shapes keeps the latest
             if spares.len() >= MAX_SPARES {
@@ -216,8 +241,14 @@ impl Data {
 
     /// Whether this is a full workspace sized for `model`.
     fn fits(&self, model: &Model) -> bool {
+        self.fits_as(model, true)
+    }
+
+    /// Whether this is a workspace sized for `model`: a full one when
+    /// `dynamics`, else a kinematics-only one.
+    fn fits_as(&self, model: &Model, dynamics: bool) -> bool {
         self.pose.len() == model.nbodies
-            && self.inertia_ref.len() == model.nbodies
+            && self.inertia_ref.len() == if dynamics { model.nbodies } else { 0 }
             && self.kin.q.len() == model.nq
             && self.kin.v.len() == model.nv
     }
@@ -304,6 +335,10 @@ thread_local! {
 
 thread_local! {
     static SPARE_DATA: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+thread_local! {
+    static SPARE_KINEMATICS: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 thread_local! {

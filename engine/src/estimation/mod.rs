@@ -120,7 +120,6 @@ pub struct BaseEstimator {
     pub estimate: BaseEstimate,
     feet: Vec<ContactPoint>,
     gravity_mps2: DVec3,
-    data: Data,
     q_fk: Vec<f64>,
     v_fk: Vec<f64>,
     meas: [FootMeasurement; KF_FEET],
@@ -174,7 +173,6 @@ impl BaseEstimator {
             },
             feet,
             gravity_mps2: model.gravity,
-            data,
             q_fk,
             v_fk: vec![0.0; model.nv],
             meas: [FootMeasurement::default(); KF_FEET],
@@ -213,22 +211,25 @@ impl BaseEstimator {
         let (nj_q, nj_v) = (input.q_joints_rad.len(), input.qd_joints_radps.len());
         self.q_fk[nq0..nq0 + nj_q].copy_from_slice(input.q_joints_rad);
         self.v_fk[nv0..nv0 + nj_v].copy_from_slice(input.qd_joints_radps);
-        forward_kinematics(model, &mut self.data, &self.q_fk, &self.v_fk);
-        for (i, foot) in self.feet.iter().enumerate() {
-            let r = self.data.body_point_world(foot.body, foot.point_in_body);
-            let rd = self.data.body_point_velocity(foot.body, foot.point_in_body);
-            let rel = rot * r;
-            let foot_guess = self.kf.position_m() + rel;
-            self.meas[i] = FootMeasurement {
-                relative_position_m: rel,
-                relative_velocity_mps: rot * (omega.cross(r) + rd),
-                stance: self.stance[i],
-                ground_height_m: input
-                    .terrain
-                    .height(foot_guess.x, foot_guess.y)
-                    .map_or(foot_guess.z, |h| h + foot.radius_m),
-            };
-        }
+        // on this thread's kinematics-only spare: nothing reads them later
+        Data::with_kinematics_spare(model, |data| {
+            forward_kinematics(model, data, &self.q_fk, &self.v_fk);
+            for (i, foot) in self.feet.iter().enumerate() {
+                let r = data.body_point_world(foot.body, foot.point_in_body);
+                let rd = data.body_point_velocity(foot.body, foot.point_in_body);
+                let rel = rot * r;
+                let foot_guess = self.kf.position_m() + rel;
+                self.meas[i] = FootMeasurement {
+                    relative_position_m: rel,
+                    relative_velocity_mps: rot * (omega.cross(r) + rd),
+                    stance: self.stance[i],
+                    ground_height_m: input
+                        .terrain
+                        .height(foot_guess.x, foot_guess.y)
+                        .map_or(foot_guess.z, |h| h + foot.radius_m),
+                };
+            }
+        });
         // 4. measurement update
         let n = self.feet.len();
         self.kf.update(&self.meas[..n]);
