@@ -151,7 +151,7 @@ fn metrics(w: &World) -> Vec<(String, String)> {
 #[test]
 fn herd_stepped_block_by_block_equals_herd_stepped_stage_by_stage_bit_for_bit() {
     // blocks of 4 (the lane groups) and 8 on two threads against the
-    // stage-major systems on one; the herds have noisy sensors and the
+    // stage-major layout on one; the herds have noisy sensors and the
     // estimator on (the defaults), so the Sense stage is in the comparison
     let mut stages = world(1, true);
     stages.sim.world.insert_resource(StageLayout::StageMajor);

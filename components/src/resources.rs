@@ -187,7 +187,7 @@ impl Default for LaneBatching {
 /// pool is woken.
 #[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StageLayout {
-    /// Each stage's system runs over every robot before the next stage
+    /// Each stage runs over every robot before the next stage
     /// starts: one parallel pass per stage. A herd larger than the cache is
     /// read from memory once per stage.
     StageMajor,

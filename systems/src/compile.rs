@@ -280,9 +280,9 @@ type CompileTriggers = (
     Res<'static, DirtyRobots>,
     Query<'static, 'static, (), (With<Robot>, RootChanged)>,
     Res<'static, SimConfig>,
-    // `apply_payload_events`: the next payload event and the clock
+    // `apply_payload_events`: the next payload event and the clock (read
+    // only while an event is pending, see `CompileGate::due`)
     Option<Res<'static, PayloadEvents>>,
-    Res<'static, SimClock>,
     // `compile_ground`: the terrains and default plane, and whether every
     // robot uses the current ground
     Res<'static, DefaultGroundPlane>,
@@ -323,14 +323,21 @@ impl CompileGate {
     /// Whether the compile schedule should run now (also when a resource it
     /// reads is missing: the schedule then reports it).
     pub fn due(&mut self, world: &World) -> bool {
-        let Ok((dirty, roots, config, events, clock, plane, terrains, mut removed, ground, batch)) =
+        let Ok((dirty, roots, config, events, plane, terrains, mut removed, ground, batch)) =
             self.0.get(world)
         else {
             return true;
         };
         // every check runs (no short-circuit), so that each consumes its changes
         let edits = !dirty.is_empty() | !roots.is_empty() | config.is_changed();
-        let payload = events.is_some_and(|e| crate::payload::payload_due(&e, clock.time_s));
+        // The clock only matters while an event waits: fetched then, not
+        // every step (a resource fetch is some 80 instructions).
+        let payload = events.is_some_and(|e| {
+            e.applied < e.events.len()
+                && world
+                    .get_resource::<SimClock>()
+                    .is_none_or(|clock| crate::payload::payload_due(&e, clock.time_s))
+        });
         let ground = plane.is_changed()
             | !terrains.is_empty()
             | (removed.read().count() > 0)

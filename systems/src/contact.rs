@@ -12,7 +12,9 @@ use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::metrics::FootSample;
 use quadsim_engine::terrain::{Terrain as _, TerrainUnion};
 
-/// Updates contacts and observations of every robot, in parallel.
+/// Updates contacts and observations of every robot, in parallel: the
+/// `Contact` stage over the whole herd as a system of its own (the step
+/// schedule runs it inside [`step_robot_pass`](crate::step_robot_pass)).
 pub fn update_contacts(
     mut batch: ResMut<RobotBatch>,
     pool: Res<SimThreadPool>,

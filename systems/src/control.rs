@@ -19,7 +19,9 @@ use quadsim_engine::control::walker::WalkerInput;
 use quadsim_engine::integrate::State;
 use quadsim_engine::kinematics::forward_kinematics;
 
-/// Runs every robot's controller on controller ticks.
+/// Runs every robot's controller on controller ticks: the `Control` stage
+/// over the whole herd as a system of its own (the step schedule runs it
+/// inside [`step_robot_pass`](crate::step_robot_pass)).
 pub fn run_controllers(
     mut batch: ResMut<RobotBatch>,
     pool: Res<SimThreadPool>,

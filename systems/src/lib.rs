@@ -9,7 +9,7 @@
 //! 2. [`StepSchedule`]: the [`SimSystems`] stages `Sense → Gait → Control → Contact →
 //!    Dynamics → Integrate → Publish`, with robots stepped in parallel on
 //!    the world's [`SimThreadPool`](quadsim_components::SimThreadPool), block
-//!    by block through all their stages by default ([`step_robot_blocks`]).
+//!    by block through all their stages by default ([`step_robot_pass`]).
 
 mod blocks;
 mod compile;
@@ -25,7 +25,7 @@ mod sense;
 mod simulation;
 mod step;
 
-pub use blocks::{plan_blocks, stage_major, step_robot_blocks};
+pub use blocks::{plan_blocks, step_robot_pass};
 pub use compile::{
     CompileGate, CompileSchedule, DirtyRobots, SharedModels, add_edit_observers,
     build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
@@ -36,16 +36,15 @@ pub use ground::compile_ground;
 pub use log::{
     FootLog, LogChannel, LogRecord, LogSink, Logger, MonitorChannel, PARALLEL_SAMPLING_MIN_ROBOTS,
     Records, RobotInfo, RobotSample, SampleChannel, SampleView, SensingLog, VelocityTargets,
-    ViewRecord, finish_logging, finish_sampling, frame_parents, log_due, log_step, start_logging,
-    start_sampling, start_sampling_each, step_time_ns, with_fresh_views,
+    ViewRecord, finish_logging, finish_sampling, frame_parents, log_due, log_step, log_steps,
+    logs_due, start_logging, start_sampling, start_sampling_each, step_time_ns, with_fresh_views,
 };
 pub use metrics::{record_metrics, record_robot};
 pub use payload::apply_payload_events;
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{
-    SimSystems, StageMajorPass, StepSchedule, build_step_schedule, register_contact,
-    register_control, register_dynamics, register_gait, register_integrate, register_publish,
-    register_sense,
+    SimSystems, StepSchedule, build_step_schedule, register_contact, register_control,
+    register_dynamics, register_gait, register_integrate, register_publish, register_sense,
 };
 pub use sense::{sense_robot, sense_robots};
 pub use simulation::Simulation;

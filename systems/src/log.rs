@@ -621,10 +621,44 @@ pub fn finish_sampling<C: SampleChannel>(
 /// samples (the step started at a multiple of the rate) or must snapshot its
 /// end state for the next step's sample. Other steps skip the system.
 pub fn log_due<C: SampleChannel>(clock: Res<SimClock>, logger: Option<Res<Logger<C>>>) -> bool {
-    logger.is_some_and(|l| {
-        let s = clock.step;
-        s.is_multiple_of(l.every_steps) || (s > 0 && (s - 1).is_multiple_of(l.every_steps))
-    })
+    logger.is_some_and(|l| logger_due(&l, clock.step))
+}
+
+/// Whether `logger` samples or snapshots at step `step` (see [`log_due`]).
+fn logger_due<C: SampleChannel>(logger: &Logger<C>, step: u64) -> bool {
+    let every = logger.every_steps;
+    step.is_multiple_of(every) || (step > 0 && (step - 1).is_multiple_of(every))
+}
+
+/// Run condition of [`log_steps`]: [`log_due`] for the log or the live
+/// monitor. One condition for both channels, because the step schedule
+/// evaluates every run condition it holds on every step.
+pub fn logs_due(
+    clock: Res<SimClock>,
+    log: Option<Res<Logger<LogChannel>>>,
+    monitor: Option<Res<Logger<MonitorChannel>>>,
+) -> bool {
+    let step = clock.step;
+    log.is_some_and(|l| logger_due(&l, step)) || monitor.is_some_and(|l| logger_due(&l, step))
+}
+
+/// The `Publish`-stage logging system: [`log_step`] for the log, then for
+/// the live monitor (at its own rate, after the log's), each on the steps
+/// its [`Logger`] is due ([`log_due`]).
+pub fn log_steps(world: &mut World) {
+    let step = world.resource::<SimClock>().step;
+    if world
+        .get_resource::<Logger<LogChannel>>()
+        .is_some_and(|l| logger_due(l, step))
+    {
+        log_step::<LogChannel>(world);
+    }
+    if world
+        .get_resource::<Logger<MonitorChannel>>()
+        .is_some_and(|l| logger_due(l, step))
+    {
+        log_step::<MonitorChannel>(world);
+    }
 }
 
 /// The `Publish`-stage system: samples the state the step started from when

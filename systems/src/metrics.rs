@@ -6,7 +6,8 @@ use bevy_ecs::prelude::*;
 use quadsim_components::{RobotBatch, RobotSim, SimConfig, SimThreadPool};
 use quadsim_engine::metrics::StepSample;
 
-/// Records one step of metrics for every robot.
+/// Records one step of metrics for every robot: as a system of its own (the
+/// step schedule records them inside [`step_robot_pass`](crate::step_robot_pass)).
 pub fn record_metrics(
     mut batch: ResMut<RobotBatch>,
     pool: Res<SimThreadPool>,

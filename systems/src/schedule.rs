@@ -3,14 +3,9 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 
-use crate::blocks::{stage_major, step_robot_blocks};
-use crate::contact::update_contacts;
-use crate::control::run_controllers;
-use crate::log::{LogChannel, MonitorChannel, log_due, log_step};
-use crate::metrics::record_metrics;
+use crate::blocks::step_robot_pass;
+use crate::log::{log_steps, logs_due};
 use crate::publish::{pose_sync_due, sync_link_poses};
-use crate::sense::sense_robots;
-use crate::step::{advance_clock, step_robots};
 
 /// Label of the schedule that advances the world by one fixed step.
 #[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
@@ -48,20 +43,22 @@ pub struct StepSchedule;
 ///    [`PoseSync`](quadsim_components::PoseSync) rate, streaming and logging.
 ///
 /// The per-robot work of these stages (sense, control, contact, integrate,
-/// metrics) is laid over the robots by the
-/// [`StageLayout`](quadsim_components::StageLayout) resource. By default
-/// ([`RobotBlocks`](quadsim_components::StageLayout::RobotBlocks)) one system,
-/// [`step_robot_blocks`], at the start of `Integrate`, takes each block of a
-/// few robots through all of them in the order above while the block is in
-/// the core's cache; the stage-major systems ([`sense_robots`],
-/// [`run_controllers`], [`update_contacts`], [`step_robots`],
-/// [`record_metrics`]) run instead under
-/// [`StageMajor`](quadsim_components::StageLayout::StageMajor). Robots do not
-/// interact, so both give the same bits; world-level systems added to the
-/// sets before `Integrate` run before the robot pass in either layout. The
-/// stage-major systems are also in the [`StageMajorPass`] set, whose one run
-/// condition ([`stage_major`]) is evaluated once per step, when its first
-/// system (`sense_robots`) comes up, instead of once per system.
+/// metrics) and the clock are one system, [`step_robot_pass`], in
+/// `Integrate`: it takes each robot through all of them in the order above,
+/// laid over the robots by the
+/// [`StageLayout`](quadsim_components::StageLayout) resource (block by
+/// block by default, or stage by stage), then counts the step. Robots do
+/// not interact, so both layouts give the same bits; world-level systems
+/// added to the sets before `Integrate` run before the robot pass in either
+/// layout.
+///
+/// The schedule holds only the systems a step needs (the robot pass,
+/// publishing), because its executor pays for every system and run
+/// condition in it on every step, whether they run or not: a skipped
+/// system costs its turn in the executor's loop, every run condition (of a
+/// system, or of a set, even one whose systems are all skipped) is
+/// evaluated each step, a system call that fetches its resources, and a
+/// system that runs fetches its own.
 #[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SimSystems {
     /// Sensors and state estimation.
@@ -93,24 +90,13 @@ impl SimSystems {
     ];
 }
 
-/// The stage-major systems ([`sense_robots`], [`run_controllers`],
-/// [`update_contacts`], [`step_robots`], [`record_metrics`]), which run only
-/// under [`StageLayout::StageMajor`](quadsim_components::StageLayout::StageMajor).
-/// [`build_step_schedule`] gives the set its run condition, [`stage_major`];
-/// the `register_*` functions put the systems in it. A set condition is
-/// evaluated once per schedule run (at the set's first system; if false,
-/// bevy skips the whole set), where a condition on each system would be
-/// evaluated five times per step.
-#[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct StageMajorPass;
-
 /// The step schedule: the seven [`SimSystems`] chained, the built-in systems
 /// registered, ambiguity detection as an error (every data conflict must be
 /// ordered on purpose).
 ///
 /// It runs on bevy's single-threaded executor: the stages are strictly
 /// sequential anyway, and the parallelism is across robots inside
-/// [`step_robots`], on the world's own thread pool (bevy's global task pool can
+/// [`step_robot_pass`], on the world's own thread pool (bevy's global task pool can
 /// only be sized once per process).
 pub fn build_step_schedule() -> Schedule {
     let mut schedule = Schedule::new(StepSchedule);
@@ -131,7 +117,6 @@ pub fn build_step_schedule() -> Schedule {
         )
             .chain(),
     );
-    schedule.configure_sets(StageMajorPass.run_if(stage_major));
     register_sense(&mut schedule);
     register_gait(&mut schedule);
     register_control(&mut schedule);
@@ -142,91 +127,50 @@ pub fn build_step_schedule() -> Schedule {
     schedule
 }
 
-/// Registers [`sense_robots`]: sensors, estimator, sensed state (in
-/// [`StageMajorPass`]).
-pub fn register_sense(schedule: &mut Schedule) {
-    schedule.add_systems(
-        sense_robots
-            .in_set(StageMajorPass)
-            .in_set(SimSystems::Sense),
-    );
-}
+/// Registers the sensing systems (none: each robot's sensors, estimator and
+/// sensed state are the first stage of [`step_robot_pass`]).
+pub fn register_sense(_schedule: &mut Schedule) {}
 
 /// Registers the gait systems (none yet: the gait planner comes in a later issue).
 pub fn register_gait(_schedule: &mut Schedule) {}
 
-/// Registers [`run_controllers`] (joint PD; VMC comes with the walking issue;
-/// in [`StageMajorPass`]).
-pub fn register_control(schedule: &mut Schedule) {
-    schedule.add_systems(
-        run_controllers
-            .in_set(StageMajorPass)
-            .in_set(SimSystems::Control),
-    );
-}
+/// Registers the control systems (none: each robot's controller is a stage
+/// of [`step_robot_pass`]).
+pub fn register_control(_schedule: &mut Schedule) {}
 
-/// Registers [`update_contacts`]: contact states (anchors) and observations,
-/// once per step at the step's start state (in [`StageMajorPass`]).
-pub fn register_contact(schedule: &mut Schedule) {
-    schedule.add_systems(
-        update_contacts
-            .in_set(StageMajorPass)
-            .in_set(SimSystems::Contact),
-    );
-}
+/// Registers the contact systems (none: each robot's contact states and
+/// observations are a stage of [`step_robot_pass`]).
+pub fn register_contact(_schedule: &mut Schedule) {}
 
 /// Registers the dynamics systems (none: see [`SimSystems::Dynamics`]).
 pub fn register_dynamics(_schedule: &mut Schedule) {}
 
-/// Registers [`step_robot_blocks`] (which returns at once unless the layout is
-/// [`RobotBlocks`](quadsim_components::StageLayout::RobotBlocks), so it needs
-/// no run condition of its own: evaluating one every step costs more than
-/// the system's own check) or [`step_robots`] (in [`StageMajorPass`]), then
-/// [`advance_clock`].
+/// Registers [`step_robot_pass`]: every robot's stages, integration
+/// included, then the clock.
 pub fn register_integrate(schedule: &mut Schedule) {
-    schedule.add_systems(
-        (
-            step_robot_blocks,
-            step_robots.in_set(StageMajorPass),
-            advance_clock,
-        )
-            .chain()
-            .in_set(SimSystems::Integrate),
-    );
+    schedule.add_systems(step_robot_pass.in_set(SimSystems::Integrate));
 }
 
-/// Registers [`record_metrics`] (in [`StageMajorPass`]), [`sync_link_poses`] (gated by [`pose_sync_due`])
-/// and [`log_step`] (while a [`Logger`](crate::Logger) exists, on the steps it samples or snapshots).
+/// Registers [`sync_link_poses`] (gated by [`pose_sync_due`]) and
+/// [`log_steps`] (while a [`Logger`](crate::Logger) of either channel
+/// exists, on the steps it samples or snapshots, [`logs_due`]). Each
+/// robot's metrics are recorded by [`step_robot_pass`].
 pub fn register_publish(schedule: &mut Schedule) {
-    schedule.add_systems(
-        record_metrics
-            .in_set(StageMajorPass)
-            .in_set(SimSystems::Publish),
-    );
     schedule.add_systems(
         sync_link_poses
             .run_if(pose_sync_due)
-            .in_set(SimSystems::Publish)
-            .after(record_metrics),
+            .in_set(SimSystems::Publish),
     );
-    // Logging (only while a `Logger` exists): samples the state the step started from.
-    // It only reads the simulation (and writes its own sink), so its order
-    // against systems users add to `Publish` does not matter: declared
-    // ambiguous with them, so that such hooks do not fail the schedule build.
+    // Logging and the live monitor (only while a `Logger` of either exists):
+    // samples the state the step started from. It only reads the simulation
+    // (and writes its own sinks), so its order against systems users add to
+    // `Publish` does not matter: declared ambiguous with them, so that such
+    // hooks do not fail the schedule build.
     schedule.add_systems(
-        log_step::<LogChannel>
-            .run_if(log_due::<LogChannel>)
+        log_steps
+            .run_if(logs_due)
             .in_set(SimSystems::Publish)
             .after(sync_link_poses)
-            .ambiguous_with_all(),
-    );
-    // The live monitor (only while a `Logger<MonitorChannel>` exists): the
-    // same sampling at its own rate, after the log's.
-    schedule.add_systems(
-        log_step::<MonitorChannel>
-            .run_if(log_due::<MonitorChannel>)
-            .in_set(SimSystems::Publish)
-            .after(log_step::<LogChannel>)
             .ambiguous_with_all(),
     );
 }

@@ -14,7 +14,9 @@ use quadsim_engine::kinematics::{base_quat, forward_kinematics};
 use quadsim_engine::sensors::{SensorTruth, SensorUpdates};
 use quadsim_engine::terrain::Terrain as _;
 
-/// Samples every robot's sensors and runs its estimator, in parallel.
+/// Samples every robot's sensors and runs its estimator, in parallel: the
+/// `Sense` stage over the whole herd as a system of its own (the step
+/// schedule runs it inside [`step_robot_pass`](crate::step_robot_pass)).
 pub fn sense_robots(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, clock: Res<SimClock>) {
     let t = clock.time_s;
     pool.for_each(&mut batch.sims, |sim| sense_robot(sim, t));

@@ -11,7 +11,9 @@ use quadsim_components::{
 use quadsim_engine::batch::{BatchData, LANES, StepParts, step_semi_implicit_batch};
 use quadsim_engine::integrate::{self, Integrator};
 
-/// Advances every compiled robot by one `dt` on the world's thread pool.
+/// Advances every compiled robot by one `dt` on the world's thread pool: the
+/// integration over the whole herd as a system of its own (the step
+/// schedule integrates inside [`step_robot_pass`](crate::step_robot_pass)).
 ///
 /// Consecutive robots of one shared model (see
 /// [`SharedModels`](crate::SharedModels)) are stepped [`LANES`] at a time with
@@ -191,8 +193,15 @@ pub fn step_robot(sim: &mut RobotSim, dt_s: f64, integrator: Integrator) {
     *last_worker = rayon::current_thread_index();
 }
 
-/// Counts the step and sets `time_s = step × dt_s`.
+/// Counts the step and sets `time_s = step × dt_s`: the end of a step's
+/// `Integrate` stage, as a system of its own (the step schedule advances the
+/// clock at the end of [`step_robot_pass`](crate::step_robot_pass)).
 pub fn advance_clock(mut clock: ResMut<SimClock>, config: Res<SimConfig>) {
+    count_step(&mut clock, config.dt_s);
+}
+
+/// Counts one step of `dt_s` on `clock` (see [`advance_clock`]).
+pub(crate) fn count_step(clock: &mut SimClock, dt_s: f64) {
     clock.step += 1;
-    clock.time_s = clock.step as f64 * config.dt_s;
+    clock.time_s = clock.step as f64 * dt_s;
 }
