@@ -108,15 +108,16 @@ fn any_point_in_ground(terrain: &TerrainUnion, data: &Data, points: &[(usize, DV
 /// The tilt test `acos(z) > max_tilt_rad`, with `z` the world z component
 /// of the base's z axis (clamped to [−1, 1]).
 ///
-/// When `max_tilt_rad` is at least 1.047197 rad (just under the default
-/// 60°, 1.0471976 rad) and `z ≥ 0.5 + 10⁻⁶`, the answer is false without
-/// the acos (one per robot and step otherwise): acos is decreasing and
-/// acos(0.5 + 10⁻⁶) = 1.0471964 rad, below that limit by 6·10⁻⁷ rad, some
-/// 10⁹ times the error of the library's acos (< 1 ulp), so the computed
-/// acos is below the limit too, and the answer is the same. Any other `z`
-/// (NaN included) or limit takes the exact test.
+/// When `max_tilt_rad` is at least π/3 − 10⁻⁶ rad (just under the default
+/// 60°) and `z ≥ 0.5 + 10⁻⁶`, the answer is false without the acos (one
+/// per robot and step otherwise): acos is decreasing and acos(0.5 + 10⁻⁶)
+/// = 1.0471964 rad, below that limit by 1.5·10⁻⁷ rad, some 10⁸ times the
+/// error of the library's acos (< 1 ulp), so the computed acos is below
+/// the limit too, and the answer is the same. Any other `z` (NaN
+/// included) or limit takes the exact test.
 fn tilted(z: f64, max_tilt_rad: f64) -> bool {
-    if max_tilt_rad >= 1.047_197 && z >= 0.5 + 1e-6 {
+    const FAST_FROM_RAD: f64 = std::f64::consts::FRAC_PI_3 - 1e-6;
+    if max_tilt_rad >= FAST_FROM_RAD && z >= 0.5 + 1e-6 {
         return false;
     }
     z.clamp(-1.0, 1.0).acos() > max_tilt_rad

@@ -678,11 +678,16 @@ impl Sym6x4 {
     #[inline(always)]
     pub fn lanes(&self) -> [Sym6; 4] {
         let (m, h, i) = (self.m.lanes(), self.h.lanes(), self.i.lanes());
-        [0, 1, 2, 3].map(|k| Sym6 {
+        // written out rather than `[0, 1, 2, 3].map(..)`: `array::map` is a
+        // generic call the compiler may leave out of line (it did, when
+        // unrelated code moved the crate's codegen units: +540 instructions
+        // per one-robot step in `aba_passes`, +300 in memcpy)
+        let lane = |k: usize| Sym6 {
             m: m[k],
             h: h[k],
             i: i[k],
-        })
+        };
+        [lane(0), lane(1), lane(2), lane(3)]
     }
 
     /// `self + o`, block by block.
