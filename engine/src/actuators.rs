@@ -114,11 +114,21 @@ impl ActuatorStats {
         );
         let (torque_hits, speed_hits) = (&mut self.torque_hits[..n], &mut self.speed_hits[..n]);
         let (was_at, tau_cmd) = (&mut self.was_at[..n], &tau_cmd[..n]);
+        // the peaks on their own: an element-wise loop without branches,
+        // which vectorises (the same operations per joint)
+        for (((peak_t, peak_d), tau), lim) in peak_torque
+            .iter_mut()
+            .zip(peak_demand.iter_mut())
+            .zip(tau_cmd)
+            .zip(effort)
+        {
+            let t = tau.abs();
+            *peak_t = peak_t.max(t.min(*lim));
+            *peak_d = peak_d.max(t);
+        }
         for j in 0..n {
             let lim = effort[j];
             let t = tau_cmd[j].abs();
-            peak_torque[j] = peak_torque[j].max(t.min(lim));
-            peak_demand[j] = peak_demand[j].max(t);
             let at_torque = t >= lim;
             if at_torque {
                 at_torque_s[j] += dt_s;

@@ -49,6 +49,28 @@ pub fn com_velocity(model: &Model, data: &Data) -> DVec3 {
     }
 }
 
+/// [`center_of_mass`] and [`com_velocity`] in one pass over the bodies (each
+/// sum in the same order, so the same bits), for a caller that reads both
+/// every step.
+pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
+    let n = model.nbodies;
+    let mut mc = DVec3::ZERO;
+    let mut p = DVec3::ZERO;
+    // `center_of_mass` sums the masses from 0.0, `com_velocity` from −0.0:
+    // the same value after the first mass, and both only divide by a positive one
+    let mut m = 0.0;
+    for (ri, v) in data.inertia_ref[..n].iter().zip(&data.vel[..n]) {
+        mc += ri.com * ri.mass;
+        m += ri.mass;
+        p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
+    }
+    if m > 0.0 {
+        (data.origin + mc / m, p / m)
+    } else {
+        (data.origin, DVec3::ZERO)
+    }
+}
+
 /// Linear momentum `Σ mᵢ (vᵢ + ωᵢ × cᵢ)` (kg·m/s, world): the linear part of
 /// [`spatial_momentum`], the same sum in the same order without the angular
 /// part's inertia products (the CoM velocity is read every step).
@@ -84,5 +106,22 @@ mod tests {
         let p = linear_momentum(&model, &data);
         assert!(p.length() > 0.1, "the state moves: {p}");
         assert_eq!(p.to_array(), spatial_momentum(&model, &data).lin.to_array());
+    }
+
+    /// The one-pass CoM and CoM velocity are the separate functions' bits.
+    #[test]
+    fn com_and_velocity_is_both_functions() {
+        let desc = builtin("quad16").unwrap();
+        let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        let mut data = Data::new(&model);
+        let mut q = crate::robots::nominal_q("quad16").unwrap();
+        q[0] = 0.3;
+        let v: Vec<f64> = (0..model.nv)
+            .map(|i| ((i as f64) * 0.9).cos() * 1.2)
+            .collect();
+        forward_kinematics(&model, &mut data, &q, &v);
+        let (c, vc) = com_and_velocity(&model, &data);
+        assert_eq!(c.to_array(), center_of_mass(&model, &data).to_array());
+        assert_eq!(vc.to_array(), com_velocity(&model, &data).to_array());
     }
 }

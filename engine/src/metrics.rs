@@ -342,9 +342,17 @@ impl MetricsAccumulator {
             self.tau_peak = vec![0.0; s.tau_joints.len()];
             self.tau_abs_integral = vec![0.0; s.tau_joints.len()];
         }
-        for (j, tau) in s.tau_joints.iter().enumerate() {
-            self.tau_peak[j] = self.tau_peak[j].max(tau.abs());
-            self.tau_abs_integral[j] += tau.abs() * s.dt_s;
+        // zipped slices of one length: no bounds checks, and the
+        // element-wise loop vectorises (the same operations per joint)
+        for ((peak, integral), tau) in self
+            .tau_peak
+            .iter_mut()
+            .zip(self.tau_abs_integral.iter_mut())
+            .zip(s.tau_joints)
+        {
+            let a = tau.abs();
+            *peak = peak.max(a);
+            *integral += a * s.dt_s;
         }
         let v_fwd = s.com_velocity_mps.truncate().dot(self.heading);
         self.speed_integral += v_fwd * s.dt_s;
@@ -357,8 +365,8 @@ impl MetricsAccumulator {
         if let Some(qd) = s.q_desired {
             for (d, q) in qd.iter().zip(s.q_joints) {
                 self.err_sq += (d - q) * (d - q);
-                self.err_n += 1;
             }
+            self.err_n += qd.len().min(s.q_joints.len()) as u64;
         }
         for (tau, qd) in s.tau_joints.iter().zip(s.qd_joints) {
             self.energy += (tau * qd).abs() * s.dt_s;

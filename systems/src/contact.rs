@@ -6,7 +6,8 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use quadsim_components::{RobotBatch, RobotSim, SimClock, SimThreadPool};
-use quadsim_engine::com::{center_of_mass, com_velocity};
+use quadsim_engine::Data;
+use quadsim_engine::com::com_and_velocity;
 use quadsim_engine::contact::{ContactKind, update_after_step};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::metrics::FootSample;
@@ -46,8 +47,7 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     let obs = &mut run.observation;
     obs.t_s = t_s;
     obs.base = data.pose[0];
-    obs.com_m = center_of_mass(model, data);
-    obs.com_velocity_mps = com_velocity(model, data);
+    (obs.com_m, obs.com_velocity_mps) = com_and_velocity(model, data);
     obs.base_height_above_ground_m = height_above_ground(&contact.terrain, obs.base.trans);
     obs.com_height_above_ground_m = height_above_ground(&contact.terrain, obs.com_m);
     // the actuated joints (compliant payloads' coordinates close q and v)
@@ -58,8 +58,10 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     obs.qd_joints.clear();
     obs.qd_joints.extend_from_slice(&state.v[nv0..nv]);
     obs.feet.resize(run.n_feet, FootSample::default());
-    for (i, foot) in obs.feet.iter_mut().enumerate() {
-        let (p, s) = (&contact.points[i], &contact.states[i]);
+    // slices of one length: no bounds checks in the loop
+    let n = obs.feet.len();
+    let feet = contact.points[..n].iter().zip(&contact.states[..n]);
+    for (foot, (p, s)) in obs.feet.iter_mut().zip(feet) {
         let centre = data.body_point_world(p.body, p.point_in_body);
         *foot = FootSample {
             in_contact: s.in_contact,
@@ -78,15 +80,47 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
         .iter()
         .zip(&contact.states)
         .any(|(p, s)| s.in_contact && matches!(p.kind, ContactKind::Knee | ContactKind::Torso))
-        || run.fall.body_points.iter().any(|&(b, p)| {
-            let w = data.body_point_world(b, p);
-            contact
-                .terrain
-                .closest(w)
-                .is_some_and(|sp| sp.depth_m >= 0.0)
-        });
-    let tilt = obs.base.rot.z_axis.z.clamp(-1.0, 1.0).acos();
+        || any_point_in_ground(&contact.terrain, data, &run.fall.body_points);
     obs.fallen = body_touch
-        || tilt > run.fall.max_tilt_rad
+        || tilted(obs.base.rot.z_axis.z, run.fall.max_tilt_rad)
         || obs.base_height_above_ground_m < run.fall.min_base_height_m;
+}
+
+/// Whether one of the body points (body index, point in the body frame) is
+/// at or below the terrain: its closest surface point's depth is ≥ 0.
+fn any_point_in_ground(terrain: &TerrainUnion, data: &Data, points: &[(usize, DVec3)]) -> bool {
+    match (terrain.patches().is_empty(), terrain.default_ground()) {
+        // The default plane alone (flat ground): `closest` answers with the
+        // plane, depth `height − z`; the same test without the general
+        // query's per-point bookkeeping.
+        (true, Some(ground)) => {
+            let h = ground.height_m;
+            points
+                .iter()
+                .any(|&(b, p)| h - data.body_point_world(b, p).z >= 0.0)
+        }
+        _ => points.iter().any(|&(b, p)| {
+            terrain
+                .closest(data.body_point_world(b, p))
+                .is_some_and(|sp| sp.depth_m >= 0.0)
+        }),
+    }
+}
+
+/// The tilt test `acos(z) > max_tilt_rad`, with `z` the world z component
+/// of the base's z axis (clamped to [−1, 1]).
+///
+/// When `max_tilt_rad` is at least π/3 − 10⁻⁶ rad (just under the default
+/// 60°) and `z ≥ 0.5 + 10⁻⁶`, the answer is false without the acos (one
+/// per robot and step otherwise): acos is decreasing and acos(0.5 + 10⁻⁶)
+/// = 1.0471964 rad, below that limit by 1.5·10⁻⁷ rad, some 10⁸ times the
+/// error of the library's acos (< 1 ulp), so the computed acos is below
+/// the limit too, and the answer is the same. Any other `z` (NaN
+/// included) or limit takes the exact test.
+fn tilted(z: f64, max_tilt_rad: f64) -> bool {
+    const FAST_FROM_RAD: f64 = std::f64::consts::FRAC_PI_3 - 1e-6;
+    if max_tilt_rad >= FAST_FROM_RAD && z >= 0.5 + 1e-6 {
+        return false;
+    }
+    z.clamp(-1.0, 1.0).acos() > max_tilt_rad
 }

@@ -39,13 +39,14 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
     match bank {
         Some(b) => run.tau_joints.copy_from_slice(&b.applied()[..nj]),
         None => {
-            for j in 0..nj {
-                let lim = if saturate {
-                    model.effort_limit[nv0 + j]
-                } else {
-                    f64::INFINITY
-                };
-                run.tau_joints[j] = tau_actuator[nv0 + j].clamp(-lim, lim);
+            // zipped slices of one length: no bounds checks
+            let (tau, limits) = (
+                &tau_actuator[nv0..nv0 + nj],
+                &model.effort_limit[nv0..nv0 + nj],
+            );
+            for ((out, tau), lim) in run.tau_joints.iter_mut().zip(tau).zip(limits) {
+                let lim = if saturate { *lim } else { f64::INFINITY };
+                *out = tau.clamp(-lim, lim);
             }
         }
     }

@@ -359,20 +359,65 @@ fn variance(p: &Cov, block: &Downdates, j: usize) -> f64 {
 /// commutes, so a symmetric `P` stays symmetric bit for bit (no
 /// symmetrisation needed). A column stays in registers over the block.
 /// Empties the block.
+///
+/// From [`TRIANGLE_FROM`] downdates on (every foot's block), only the upper
+/// triangle is computed (each column's rows down to the diagonal, rounded
+/// up to whole groups of four rows, the vector width) and the rest copied
+/// from the mirrored entries: the same bits as computing them, as `P` is
+/// symmetric bit for bit, with about 45% fewer products for 128 copies.
 #[inline(always)]
 fn apply(p: &mut Cov, block: &mut Downdates) {
     let g = &block.g[..block.n.min(BLOCK)];
-    for (j, col) in p.chunks_exact_mut(KF_N).enumerate() {
-        let mut c: [f64; KF_N] = col.try_into().expect("a column");
+    if g.len() >= TRIANGLE_FROM {
+        const _: () = assert!(KF_N == 18, "the column groups below cover 18 rows");
+        apply_upper::<0, 4, 4>(p, g);
+        apply_upper::<4, 8, 8>(p, g);
+        apply_upper::<8, 12, 12>(p, g);
+        apply_upper::<12, 16, 16>(p, g);
+        apply_upper::<16, 18, 18>(p, g);
+        mirror_lower::<0, 4, 4>(p);
+        mirror_lower::<4, 8, 8>(p);
+        mirror_lower::<8, 12, 12>(p);
+        mirror_lower::<12, 16, 16>(p);
+    } else {
+        apply_upper::<0, KF_N, KF_N>(p, g);
+    }
+    block.n = 0;
+}
+
+/// From this many downdates in a block [`apply`] computes the upper
+/// triangle only: a swing foot's 3 and a stance foot's 7 (measured at 64
+/// robots: `update_feet` 2,292 instructions per robot-step with the full
+/// square, 2,021 with the triangle from 5 downdates, 1,945 from 3; 2,324
+/// with the triangle for every block and no branch, the compiler laying
+/// the loops out otherwise).
+const TRIANGLE_FROM: usize = 3;
+
+/// [`apply`]'s downdates of the first `R` rows of the columns `J0..J1`.
+#[inline(always)]
+fn apply_upper<const J0: usize, const J1: usize, const R: usize>(p: &mut Cov, g: &[[f64; KF_N]]) {
+    for j in J0..J1 {
+        let col = &mut p[j * KF_N..j * KF_N + R];
+        let mut c: [f64; R] = (&*col).try_into().expect("R rows");
         for g in g {
             let gj = g[j];
-            for (c, gi) in c.iter_mut().zip(g) {
+            for (c, gi) in c.iter_mut().zip(&g[..R]) {
                 *c -= gi * gj;
             }
         }
         col.copy_from_slice(&c);
     }
-    block.n = 0;
+}
+
+/// Rows `R..` of the columns `J0..J1` from the mirrored entries (rows
+/// `J0..J1` of the columns `R..`, computed by [`apply_upper`]).
+#[inline(always)]
+fn mirror_lower<const J0: usize, const J1: usize, const R: usize>(p: &mut Cov) {
+    for j in J0..J1 {
+        for i in R..KF_N {
+            p[j * KF_N + i] = p[i * KF_N + j];
+        }
+    }
 }
 
 /// Most scalar measurements of one block: a stance foot's 3 positions, 3

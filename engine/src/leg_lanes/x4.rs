@@ -678,8 +678,10 @@ impl Sym6x4 {
     #[inline(always)]
     pub fn lanes(&self) -> [Sym6; 4] {
         let (m, h, i) = (self.m.lanes(), self.h.lanes(), self.i.lanes());
-        // written out: `[0, 1, 2, 3].map(..)` goes through `array::try_map`,
-        // which codegen-unit splits can leave out of line in ABA's hot loop
+        // written out rather than `[0, 1, 2, 3].map(..)`: `array::map` is a
+        // generic call the compiler may leave out of line (it did, when
+        // unrelated code moved the crate's codegen units: +540 instructions
+        // per one-robot step in `aba_passes`, +300 in memcpy)
         let lane = |k: usize| Sym6 {
             m: m[k],
             h: h[k],
