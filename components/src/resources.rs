@@ -222,10 +222,8 @@ pub struct RobotSim {
     /// The compiled articulation (shared, immutable; replaced on recompile).
     pub model: Arc<Model>,
     /// Kinematics/dynamics workspace; after a step it holds the last
-    /// derivative evaluation, not the new state, unless the step lent the
-    /// robot a thread's workspace ([`Data::with_block_workspaces`]; boxed so
-    /// that lending it exchanges a pointer).
-    pub data: Box<Data>,
+    /// derivative evaluation, not the new state.
+    pub data: Data,
     /// Generalised position and velocity (Pinocchio conventions, nq and nv).
     pub state: State,
     /// Actuator torque command (N·m or N, nv; base entries normally zero),
@@ -303,7 +301,7 @@ impl RobotSim {
         workspace.passive = passive;
         Self {
             entity,
-            data: Box::new(Data::new(&model)),
+            data: Data::new(&model),
             state: State::neutral(&model),
             tau_actuator: vec![0.0; model.nv],
             workspace,

@@ -183,67 +183,6 @@ impl Data {
         result
     }
 
-    /// Runs `f` on `robots` with each robot's `Data` (reached through
-    /// `data_of`) exchanged for one of this thread's block workspaces of its
-    /// model's shape, and exchanges them back afterwards; a workspace is
-    /// allocated at the first use of a shape on the thread.
-    ///
-    /// Why: a step writes a robot's kinematics and dynamics arrays (about
-    /// 5 KiB for quad16) before it reads them, so nothing in a robot's `Data`
-    /// is needed from one step to the next; but in a herd larger than a
-    /// core's L2 cache, that `Data` has left the cache since the robot's last
-    /// step, and every one of those writes first fetches its line from
-    /// memory. The thread's workspaces stay in its cache from block to block.
-    ///
-    /// The results are the same bits: each workspace's kinematics cache is
-    /// cleared when it is lent (what it held for another robot is never
-    /// reused, as with [`Self::with_spare`]), and the robot's own `Data`,
-    /// untouched, comes back with its cache cleared too, so that a later
-    /// reader (a log, a publisher) recomputes what it needs instead of trusting
-    /// a stale state.
-    pub fn with_block_workspaces<T, R>(
-        robots: &mut [T],
-        data_of: impl Fn(&mut T) -> (&Model, &mut Box<Data>),
-        f: impl FnOnce(&mut [T]) -> R,
-    ) -> R {
-        let mut pool = BLOCK_WORKSPACES.with(|cell| std::mem::take(&mut *cell.borrow_mut()));
-        let BlockWorkspaces { datas, lent } = &mut pool;
-        lent.clear();
-        for robot in robots.iter_mut() {
-            let (model, data) = data_of(robot);
-            let free = |i: &usize| !lent.contains(i) && datas[*i].fits(model);
-            let i = match (0..datas.len()).find(free) {
-                Some(i) => i,
-                None => {
-                    datas.push(Box::new(Data::new(model)));
-                    datas.len() - 1
-                }
-            };
-            std::mem::swap(data, &mut datas[i]);
-            data.kin.level = 0;
-            lent.push(i);
-        }
-        let result = f(robots);
-        for (robot, &i) in robots.iter_mut().zip(lent.iter()) {
-            let (_, data) = data_of(robot);
-            std::mem::swap(data, &mut datas[i]);
-            data.kin.level = 0;
-        }
-        // a thread that meets many shapes keeps the latest (and never fewer
-        // than this block needs)
-        let keep = lent.len().max(MAX_BLOCK_WORKSPACES);
-        if datas.len() > keep {
-            datas.drain(..datas.len() - keep);
-        }
-        BLOCK_WORKSPACES.with(|cell| *cell.borrow_mut() = pool);
-        result
-    }
-
-    /// Whether this is a full workspace sized for `model`.
-    fn fits(&self, model: &Model) -> bool {
-        self.fits_as(model, true)
-    }
-
     /// Whether this is a workspace sized for `model`: a full one when
     /// `dynamics`, else a kinematics-only one.
     fn fits_as(&self, model: &Model, dynamics: bool) -> bool {
@@ -313,25 +252,6 @@ pub(crate) struct BodyScratch {
 
 /// Most spare workspaces ([`Data::with_spare`]) a thread keeps.
 const MAX_SPARES: usize = 8;
-
-/// Most block workspaces ([`Data::with_block_workspaces`]) a thread keeps
-/// beyond the current block's.
-const MAX_BLOCK_WORKSPACES: usize = 64;
-
-/// A thread's block workspaces and which of them are lent out.
-#[derive(Default)]
-struct BlockWorkspaces {
-    /// Boxed: lending one exchanges a pointer with the robot's boxed `Data`.
-    #[allow(clippy::vec_box)]
-    datas: Vec<Box<Data>>,
-    /// `datas` index lent to each robot of the current block, in order.
-    lent: Vec<usize>,
-}
-
-thread_local! {
-    static BLOCK_WORKSPACES: std::cell::RefCell<BlockWorkspaces> =
-        std::cell::RefCell::new(BlockWorkspaces::default());
-}
 
 thread_local! {
     static SPARE_DATA: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
@@ -418,61 +338,5 @@ mod tests {
             );
             assert_eq!(outer.tau, fresh(&light), "and leaves the outer one alone");
         });
-    }
-
-    /// Robots of mixed shapes on lent block workspaces compute what their
-    /// own workspaces would, in two blocks in a row (the second on workspaces
-    /// that hold the first block's results, in the other order: the two
-    /// quad16 of different masses at one state swap workspaces), and get
-    /// their own workspaces back, untouched, with the kinematics cache cleared.
-    #[test]
-    fn lent_block_workspaces_compute_what_the_robots_own_do() {
-        let models = [
-            model("quad16", 1.0),
-            model("quad12", 1.0),
-            model("quad16", 1.5),
-        ];
-        let state = |m: &Model| {
-            let q = nominal_q(if m.nv == 22 { "quad16" } else { "quad12" }).unwrap();
-            assert_eq!(q.len(), m.nq);
-            let v: Vec<f64> = (0..m.nv).map(|i| (i as f64 * 0.3).cos()).collect();
-            let a: Vec<f64> = (0..m.nv).map(|i| (i as f64 * 0.5).sin()).collect();
-            (q, v, a)
-        };
-        let own = |m: &Model| {
-            let (q, v, a) = state(m);
-            rnea(m, &mut Data::new(m), &q, &v, &a).to_vec()
-        };
-        for order in [[0, 1, 2], [2, 1, 0]] {
-            // each robot's own workspace holds its kinematics (cache valid)
-            let mut block: Vec<(&Model, Box<Data>, Vec<f64>)> = order
-                .iter()
-                .map(|&i| {
-                    let m = &models[i];
-                    let (q, v, _) = state(m);
-                    let mut d = Box::new(Data::new(m));
-                    forward_kinematics(m, &mut d, &q, &v);
-                    (m, d, Vec::new())
-                })
-                .collect();
-            let own_addr: Vec<*const Data> = block.iter().map(|r| &*r.1 as *const Data).collect();
-            Data::with_block_workspaces(
-                &mut block,
-                |r| (r.0, &mut r.1),
-                |block| {
-                    for r in block.iter_mut() {
-                        assert!(!own_addr.contains(&(&*r.1 as *const Data)), "lent");
-                        let (q, v, a) = state(r.0);
-                        r.2 = rnea(r.0, &mut r.1, &q, &v, &a).to_vec();
-                    }
-                },
-            );
-            for (r, &i) in block.iter().zip(&order) {
-                assert_eq!(r.2, own(&models[i]), "robot {i}");
-                let (q, v, _) = state(&models[i]);
-                assert!(own_addr.contains(&(&*r.1 as *const Data)), "given back");
-                assert!(!r.1.kinematics_hold(&models[i], &q, &v), "cache cleared");
-            }
-        }
     }
 }

@@ -14,10 +14,8 @@
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{
-    ControlRate, LaneBatching, RobotBatch, RobotSim, SimClock, SimConfig, SimThreadPool,
-    StageLayout,
+    ControlRate, LaneBatching, RobotBatch, SimClock, SimConfig, SimThreadPool, StageLayout,
 };
-use quadsim_engine::Data;
 
 use crate::contact::observe_robot;
 use crate::control::{clock_dt, control_stage, is_control_tick};
@@ -79,30 +77,19 @@ pub fn step_robot_pass(
     match layout.as_deref().copied().unwrap_or_default() {
         StageLayout::RobotBlocks { robots } => {
             plan_blocks(&groups, robots, &mut blocks);
-            // A herd of more than one block leaves the cache between steps:
-            // its blocks borrow the thread's workspaces (see
-            // `Data::with_block_workspaces`).
-            let borrow = blocks.len() > 1;
             pool.for_each_group(sims, &blocks, |block| {
-                let stages = |block: &mut [RobotSim]| {
-                    for sim in block.iter_mut() {
-                        sense_robot(sim, t_s);
-                    }
-                    for sim in block.iter_mut() {
-                        control_stage(sim, t_s, tick, control_dt_s);
-                    }
-                    for sim in block.iter_mut() {
-                        observe_robot(sim, t_s);
-                    }
-                    for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
-                    for sim in block.iter_mut() {
-                        record_robot(sim, dt_s, saturate);
-                    }
-                };
-                if borrow {
-                    Data::with_block_workspaces(block, |sim| (&*sim.model, &mut sim.data), stages);
-                } else {
-                    stages(block);
+                for sim in block.iter_mut() {
+                    sense_robot(sim, t_s);
+                }
+                for sim in block.iter_mut() {
+                    control_stage(sim, t_s, tick, control_dt_s);
+                }
+                for sim in block.iter_mut() {
+                    observe_robot(sim, t_s);
+                }
+                for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
+                for sim in block.iter_mut() {
+                    record_robot(sim, dt_s, saturate);
                 }
             });
         }

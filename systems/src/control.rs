@@ -143,7 +143,7 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
         let own_view = control.is_some();
         let (model, data) = match control {
             Some(c) => (&*c.model, &mut c.data),
-            None => (&**model, &mut **data),
+            None => (&**model, data),
         };
         let tau_actuator = &mut tau_actuator[..nv];
         let n = run.n_feet.min(4);
