@@ -144,7 +144,7 @@ impl Data {
             let i = spares.iter().position(|d| d.fits(model))?;
             Some(spares.swap_remove(i))
         });
-        let mut data = taken.unwrap_or_else(|| Data::new(model));
+        let mut data = taken.unwrap_or_else(|| Box::new(Data::new(model)));
         data.kin.level = 0;
         let result = f(&mut data);
         SPARE_DATA.with(|cell| {
@@ -303,7 +303,11 @@ thread_local! {
 }
 
 thread_local! {
-    static SPARE_DATA: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Boxed: taking one out and putting it back moves a pointer, not the
+    /// `Data` (about 700 bytes of vector headers and the base's subspace,
+    /// copied twice per control tick).
+    #[allow(clippy::vec_box)]
+    static SPARE_DATA: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 thread_local! {
