@@ -153,7 +153,7 @@ impl Data {
     /// A spare of `pool` (full workspaces when `dynamics`, else
     /// kinematics-only) fitted to `model`, its cache cleared, lent to `f`.
     fn with_pooled<R>(
-        pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<Data>>>,
+        pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<Box<Data>>>>,
         model: &Model,
         dynamics: bool,
         f: impl FnOnce(&mut Data) -> R,
@@ -164,11 +164,11 @@ impl Data {
             Some(spares.swap_remove(i))
         });
         let mut data = taken.unwrap_or_else(|| {
-            if dynamics {
+            Box::new(if dynamics {
                 Data::new(model)
             } else {
                 Data::for_kinematics(model)
-            }
+            })
         });
         data.kin.level = 0;
         let result = f(&mut data);
@@ -254,11 +254,17 @@ pub(crate) struct BodyScratch {
 const MAX_SPARES: usize = 8;
 
 thread_local! {
-    static SPARE_DATA: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Boxed: taking one out and putting it back moves a pointer, not the
+    /// `Data` (about 700 bytes of vector headers and the base's subspace,
+    /// copied twice per control tick).
+    #[allow(clippy::vec_box)]
+    static SPARE_DATA: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 thread_local! {
-    static SPARE_KINEMATICS: std::cell::RefCell<Vec<Data>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Boxed as [`SPARE_DATA`] is.
+    #[allow(clippy::vec_box)]
+    static SPARE_KINEMATICS: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 thread_local! {

@@ -5,6 +5,7 @@ use crate::data::Data;
 use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
 use crate::spatial::Motion;
+use multiversion::multiversion;
 
 /// Inverse dynamics without external forces. Fills and returns `data.tau` (nv):
 /// for a floating base, `tau[0..6]` is the wrench (force, torque; base frame)
@@ -38,6 +39,30 @@ pub fn rnea_from_kinematics(
     if use_external {
         data.f[0] -= data.f_ext[0];
     }
+    rnea_bodies(model, data, v, a, use_external);
+    if model.joint_type[0] == JointType::Free {
+        for k in 0..6 {
+            data.tau[k] = data.s_base[k].dot(data.f[0]);
+        }
+    }
+}
+
+/// RNEA's two passes over the bodies after the base's (its acceleration and
+/// own force set; the children's forces are added to it here), compiled for
+/// x86-64-v3 (AVX2, FMA) and the generic target with the CPU's choice at the
+/// first call. quad16's shape with AVX runs the four legs in SIMD lanes
+/// ([`crate::leg_lanes`]); the same bits either way (the same operations in
+/// the same order, nothing fused into an FMA).
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn rnea_bodies(model: &Model, data: &mut Data, v: &[f64], a: &[f64], use_external: bool) {
+    multiversion::target::match_target! {
+        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
+            && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
+        {
+            return crate::leg_lanes::rnea_passes_legs(model, plan, data, v, a, use_external);
+        },
+        _ => {},
+    }
     for i in 1..model.nbodies {
         let p = model.parent[i];
         let iv = model.idx_v[i];
@@ -57,10 +82,5 @@ pub fn rnea_from_kinematics(
         let p = model.parent[i];
         let fi = data.f[i];
         data.f[p] += fi;
-    }
-    if model.joint_type[0] == JointType::Free {
-        for k in 0..6 {
-            data.tau[k] = data.s_base[k].dot(data.f[0]);
-        }
     }
 }

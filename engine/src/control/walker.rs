@@ -874,13 +874,14 @@ impl Walker {
                 // quad16's ankle: keep the foot level with the body
                 let (kp, kd) = self.params.ankle_hold;
                 let j = vi[3] - nv0;
-                let mut level = [0.0; 4];
-                let _ = leg.ik_clamped_into(
+                let level = match leg.ik_clamped_ankle(
                     rot.transpose() * (self.feet_world[i] - p_base),
                     &self.params.ik,
-                    &mut level,
-                );
-                tau_joints[j] += kp * (level[3] - q[qi[3]]) - kd * v[vi[3]];
+                ) {
+                    Some(Ok(a)) => a,
+                    _ => 0.0,
+                };
+                tau_joints[j] += kp * (level - q[qi[3]]) - kd * v[vi[3]];
             }
         }
         for ((t, lim), h) in tau_joints

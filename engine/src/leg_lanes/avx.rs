@@ -1,5 +1,6 @@
-//! The lane passes of [`super`]: forward kinematics and ABA with one AVX lane
-//! per leg. Each statement mirrors the general path's (named in comments).
+//! The lane passes of [`super`]: forward kinematics, ABA and RNEA with one
+//! AVX lane per leg. Each statement mirrors the general path's (named in
+//! comments).
 
 use super::LEGS;
 use super::LegLanes;
@@ -334,6 +335,83 @@ pub(crate) fn aba_passes_legs(
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
     GROUP_ABA.with(|cell| drop(cell.replace(work_all)));
+}
+
+/// Deepest legs [`rnea_passes_legs`] takes (its per-group forces live on
+/// the stack); deeper ones run the general path.
+pub(crate) const RNEA_MAX_GROUPS: usize = 8;
+
+/// RNEA's two passes over the legs (`rnea::rnea_from_kinematics`), after
+/// the base's acceleration `data.acc[0]` and force `data.f[0]` are set:
+/// fills the legs' `acc`, `f` and `tau` entries and adds the hips' forces
+/// to `data.f[0]` in decreasing body index (lane 3 first), as the general
+/// path's reverse loop does. `plan` has at most [`RNEA_MAX_GROUPS`] groups.
+#[target_feature(enable = "avx")]
+pub(crate) fn rnea_passes_legs(
+    model: &Model,
+    plan: &LegLanes,
+    data: &mut Data,
+    v: &[f64],
+    a: &[f64],
+    use_external: bool,
+) {
+    let n = model.nbodies;
+    let nv = model.nv;
+    let groups = &plan.groups[..];
+    let ng = groups.len();
+    assert!(ng <= RNEA_MAX_GROUPS, "legs within RNEA's lane workspace");
+    let armature = &model.armature[..nv];
+    let (v, a) = (&v[..nv], &a[..nv]);
+    let mut fs = [Force4::default(); RNEA_MAX_GROUPS];
+    let mut ss = [Motion4::default(); RNEA_MAX_GROUPS];
+    // Pass 1, hips to feet: acc = acc_p + S q̈ + v × S q̇, f = I acc + v ×* I v.
+    let mut a_parent = Motion4::splat(data.acc[0]);
+    for (g, (grp, st)) in groups.iter().zip(&plan.steps).enumerate() {
+        let (s, inertia, vi) = group_kinematics(grp, data);
+        let acc = a_parent
+            .add(s.scale(gather(a, &st.idx_v)))
+            .add(vi.cross(s.scale(gather(v, &st.idx_v))));
+        let mut f = inertia
+            .mul_motion(acc)
+            .add(vi.cross_force(inertia.mul_motion(vi)));
+        if use_external {
+            f = f.sub(Force4::from_lanes(grp.map(|i| data.f_ext[i])));
+        }
+        let accs = acc.lanes();
+        let acc_all = &mut data.acc[..n];
+        for k in 0..LEGS {
+            acc_all[grp[k]] = accs[k];
+        }
+        fs[g] = f;
+        ss[g] = s;
+        a_parent = acc;
+    }
+    // Pass 2, feet to hips: each body's force with its one child's added,
+    // then τ = Sᵀ f + armature · q̈.
+    let mut child: Option<Force4> = None;
+    for g in (0..ng).rev() {
+        let (grp, st) = (&groups[g], &plan.steps[g]);
+        let mut f = fs[g];
+        if let Some(c) = child {
+            f = f.add(c);
+        }
+        let tau = ss[g]
+            .dot(f)
+            .add(gather(armature, &st.idx_v).mul(gather(a, &st.idx_v)));
+        let (taus, fl) = (tau.to_array(), f.lanes());
+        let (tau_all, f_all) = (&mut data.tau[..nv], &mut data.f[..n]);
+        for k in 0..LEGS {
+            tau_all[st.idx_v[k]] = taus[k];
+            f_all[grp[k]] = fl[k];
+        }
+        child = Some(f);
+    }
+    if let Some(c) = child {
+        let fl = c.lanes();
+        for k in (0..LEGS).rev() {
+            data.f[0] += fl[k];
+        }
+    }
 }
 
 thread_local! {

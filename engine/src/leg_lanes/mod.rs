@@ -24,7 +24,9 @@ mod avx;
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{GroupStep, aba_passes_legs, poses_legs, reserve_workspace};
+pub(crate) use avx::{
+    GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, poses_legs, reserve_workspace, rnea_passes_legs,
+};
 
 use crate::model::{JointType, Model};
 
@@ -194,6 +196,62 @@ mod tests {
                     bits(&outs[1]),
                     "{name} {base:?} trial {trial}"
                 );
+            }
+        }
+    }
+
+    /// RNEA with the legs in lanes against the general path, bit for bit:
+    /// every `tau`, `acc` and `f` entry at random states and accelerations,
+    /// with and without external forces, on quad16 (floating and fixed base).
+    #[test]
+    fn rnea_in_lanes_gives_the_general_paths_bits() {
+        use crate::rnea::rnea_from_kinematics;
+        for base in [BaseKind::Floating, BaseKind::Fixed] {
+            let desc = crate::robots::builtin("quad16").unwrap();
+            let fast = Model::from_description(&desc, base).unwrap();
+            assert!(fast.leg_lanes.is_some());
+            let mut general = fast.clone();
+            general.leg_lanes = None;
+            let mut r = ChaCha8Rng::seed_from_u64(11);
+            for trial in 0..50 {
+                let mut q = fast.neutral_q();
+                let nb = fast.base_nq();
+                for x in &mut q[nb..] {
+                    *x = r.random_range(-3.0..3.0);
+                }
+                if fast.is_floating() {
+                    q[..3].copy_from_slice(&[r.random_range(-5.0..5.0), 0.3, 0.5]);
+                }
+                let v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
+                // zeros in some rows, as the walker's base and stance legs have
+                let a: Vec<f64> = (0..fast.nv)
+                    .map(|k| {
+                        if k % 3 == 0 {
+                            0.0
+                        } else {
+                            r.random_range(-40.0..40.0)
+                        }
+                    })
+                    .collect();
+                let external = trial % 2 == 1;
+                let mut outs = Vec::new();
+                for m in [&fast, &general] {
+                    let mut d = Data::new(m);
+                    forward_kinematics(m, &mut d, &q, &v);
+                    for (i, f) in d.f_ext.iter_mut().enumerate() {
+                        let k = i as f64;
+                        f.lin = DVec3::new(3.0 * k - 10.0, 0.5 * k, 40.0 - k);
+                        f.ang = DVec3::new(0.1 * k, -0.2, 0.3 * k - 1.0);
+                    }
+                    rnea_from_kinematics(m, &mut d, &v, &a, external);
+                    let mut all = d.tau.clone();
+                    for i in 0..m.nbodies {
+                        all.extend(d.acc[i].to_array());
+                        all.extend(d.f[i].to_array());
+                    }
+                    outs.push(all);
+                }
+                assert_eq!(bits(&outs[0]), bits(&outs[1]), "{base:?} trial {trial}");
             }
         }
     }

@@ -216,6 +216,33 @@ pub fn knee_bend(wa: DVec2, ub: DVec2, theta_b: f64) -> f64 {
     wrap_angle(theta_b + arg(ub) - arg(wa))
 }
 
+/// A link of a two-link chain with its length and argument, which
+/// [`two_link_links`] reads: a leg's fixed links are measured once when the
+/// leg is built instead of at every solve (two `atan2` and two square roots
+/// of four `atan2` and three square roots per solve; the same values, so the
+/// same bits).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Link {
+    /// The link (complex form).
+    pub w: DVec2,
+    /// `|w|` (m).
+    pub length_m: f64,
+    /// `arg w` (rad).
+    pub arg_rad: f64,
+}
+
+impl Link {
+    /// `w` with its length and argument.
+    #[inline]
+    pub(crate) fn new(w: DVec2) -> Link {
+        Link {
+            w,
+            length_m: w.length(),
+            arg_rad: arg(w),
+        }
+    }
+}
+
 /// Solves `e^{iθa}(wa + e^{iθb} ub) = target` for `(θa, θb)` on the branch
 /// `sign(γ) = bend_sign` (law of cosines for `γ`, then the direction).
 ///
@@ -230,7 +257,20 @@ pub(crate) fn two_link(
     bend_sign: f64,
     clamp: bool,
 ) -> Result<(f64, f64, bool), IkError> {
-    let (la, lb) = (wa.length(), ub.length());
+    two_link_links(&Link::new(wa), &Link::new(ub), target, bend_sign, clamp)
+}
+
+/// [`two_link`] with the links' lengths and arguments given.
+#[inline]
+pub(crate) fn two_link_links(
+    a: &Link,
+    b: &Link,
+    target: DVec2,
+    bend_sign: f64,
+    clamp: bool,
+) -> Result<(f64, f64, bool), IkError> {
+    let (wa, ub) = (a.w, b.w);
+    let (la, lb) = (a.length_m, b.length_m);
     let r = target.length();
     let (min_reach, max_reach) = ((la - lb).abs(), la + lb);
     // round-off allowance: the target of an exact FK may land a few ulps outside
@@ -251,7 +291,7 @@ pub(crate) fn two_link(
         1.0
     };
     let gamma = bend_sign * cos_g.acos();
-    let theta_b = wrap_angle(gamma - arg(ub) + arg(wa));
+    let theta_b = wrap_angle(gamma - b.arg_rad + a.arg_rad);
     let reach = wa + cmul(cis(theta_b), ub);
     let theta_a = wrap_angle(arg(target) - arg(reach));
     Ok((theta_a, theta_b, out))

@@ -266,6 +266,19 @@ impl LegKinematics {
         Ok(clamped)
     }
 
+    /// [`Quad16Leg::ik_clamped_ankle`]: the ankle angle of the clamped IK
+    /// alone; `None` for a leg without an ankle.
+    pub fn ik_clamped_ankle(
+        &self,
+        target_m: DVec3,
+        opts: &IkOptions,
+    ) -> Option<Result<f64, IkError>> {
+        match self {
+            Self::Quad16(l) => Some(l.ik_clamped_ankle(target_m, opts)),
+            Self::Quad12(_) => None,
+        }
+    }
+
     /// The leg's joint velocities (rad/s) for a foot velocity (m/s, base
     /// frame), into `out` (see [`Quad16Leg::joint_velocities`]).
     ///

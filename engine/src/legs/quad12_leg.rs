@@ -25,8 +25,8 @@
 //! `docs/study_b_kinematics.md` compares this with the study's printed inverse.
 
 use super::ik::{
-    IkClamped, IkError, IkOptions, cis4, cmul, dls_solve, knee_bend, planar, rotation_z, two_link,
-    wrap_angle,
+    IkClamped, IkError, IkOptions, Link, cis4, cmul, dls_solve, knee_bend, planar, rotation_z,
+    two_link_links, wrap_angle,
 };
 use super::{LegError, chain_of, foot_point_in_body};
 use crate::model::Model;
@@ -48,6 +48,10 @@ pub struct Quad12Leg {
     mount_inv: Transform,
     offset_m: f64,
     links: [DVec2; 3],
+    /// `links[1]` (thigh) and `links[2]` (shank) with their lengths and
+    /// arguments, for the two-link solve.
+    thigh: Link,
+    shank: Link,
     q_index: [usize; 3],
     v_index: [usize; 3],
 }
@@ -68,13 +72,16 @@ impl Quad12Leg {
         let o3 = foot_point_in_body(model, foot_frame, point_in_foot_m);
         let o = [chain[1].placement.trans, chain[2].placement.trans, o3];
         let mount = chain[0].placement;
+        let links = o.map(planar);
         Ok(Quad12Leg {
             foot_frame,
             point_in_foot_m,
             mount,
             mount_inv: mount.inverse(),
             offset_m: o.iter().map(|v| v.y).sum(),
-            links: o.map(planar),
+            links,
+            thigh: Link::new(links[1]),
+            shank: Link::new(links[2]),
             q_index: std::array::from_fn(|k| chain[k].q_index),
             v_index: std::array::from_fn(|k| chain[k].v_index),
         })
@@ -204,9 +211,9 @@ impl Quad12Leg {
             ((rho - d.abs()) * (rho + d.abs())).sqrt()
         };
         let yaw = wrap_angle(p.y.atan2(p.x) - d.atan2(x));
-        let [w1, w2, w3] = self.links;
-        let target = DVec2::new(p.z, x) - w1;
-        let (pitch, knee, out) = two_link(w2, w3, target, opts.knee.sign(NOMINAL_BEND), clamp)?;
+        let target = DVec2::new(p.z, x) - self.links[0];
+        let sign = opts.knee.sign(NOMINAL_BEND);
+        let (pitch, knee, out) = two_link_links(&self.thigh, &self.shank, target, sign, clamp)?;
         Ok(([yaw, pitch, knee], inside || out))
     }
 

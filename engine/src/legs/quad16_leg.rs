@@ -27,8 +27,8 @@
 //!    `u₃ = w₃ + e^{ia}w₄` and the same two-link solve places the foot point.
 
 use super::ik::{
-    AnkleMode, IkClamped, IkError, IkOptions, cis, cis4, cmul, dls_solve, knee_bend, planar,
-    rotation_x, two_link, wrap_angle,
+    AnkleMode, IkClamped, IkError, IkOptions, Link, cis, cis4, cmul, dls_solve, knee_bend, planar,
+    rotation_x, two_link, two_link_links, wrap_angle,
 };
 use super::{LegError, chain_of, foot_point_in_body};
 use crate::model::Model;
@@ -50,6 +50,11 @@ pub struct Quad16Leg {
     mount_inv: Transform,
     offset_m: f64,
     links: [DVec2; 4],
+    /// `links[1]` (thigh) and `links[2]` (shank) with their lengths and
+    /// arguments, the two-link solve's fixed links under
+    /// [`AnkleMode::FootPitch`].
+    thigh: Link,
+    shank: Link,
     q_index: [usize; 4],
     v_index: [usize; 4],
 }
@@ -75,13 +80,16 @@ impl Quad16Leg {
             o4,
         ];
         let mount = chain[0].placement;
+        let links = o.map(planar);
         Ok(Quad16Leg {
             foot_frame,
             point_in_foot_m,
             mount,
             mount_inv: mount.inverse(),
             offset_m: o.iter().map(|v| v.y).sum(),
-            links: o.map(planar),
+            links,
+            thigh: Link::new(links[1]),
+            shank: Link::new(links[2]),
             q_index: std::array::from_fn(|k| chain[k].q_index),
             v_index: std::array::from_fn(|k| chain[k].v_index),
         })
@@ -197,6 +205,29 @@ impl Quad16Leg {
         opts: &IkOptions,
         clamp: bool,
     ) -> Result<([f64; 4], bool), IkError> {
+        let (p, z, inside) = self.roll_plane(target_m, clamp)?;
+        let roll = wrap_angle(p.z.atan2(p.y) - z.atan2(self.offset_m));
+        let (pitch, knee, ankle, out) = self.pitch_chain(DVec2::new(z, p.x), opts, clamp)?;
+        Ok(([roll, pitch, knee, ankle], inside || out))
+    }
+
+    /// [`Self::ik_clamped_angles`]' ankle angle alone (the same bits),
+    /// without the roll angle's two `atan2`: what a stance foot held level
+    /// needs.
+    ///
+    /// # Errors
+    /// [`IkError::NonFinite`] only.
+    pub fn ik_clamped_ankle(&self, target_m: DVec3, opts: &IkOptions) -> Result<f64, IkError> {
+        let (p, z, _) = self.roll_plane(target_m, true)?;
+        let (_, _, ankle, _) = self.pitch_chain(DVec2::new(z, p.x), opts, true)?;
+        Ok(ankle)
+    }
+
+    /// Steps 1–2 of the inverse (module docs): the target in the mount frame
+    /// `p`, the foot's height `Z` below the roll axis in the rolled hip frame,
+    /// and whether the target was inside the offset circle.
+    #[inline]
+    fn roll_plane(&self, target_m: DVec3, clamp: bool) -> Result<(DVec3, f64, bool), IkError> {
         if !target_m.is_finite() {
             return Err(IkError::NonFinite { target_m });
         }
@@ -216,14 +247,25 @@ impl Quad16Leg {
         } else {
             -((r - d.abs()) * (r + d.abs())).sqrt()
         };
-        let roll = wrap_angle(p.z.atan2(p.y) - z.atan2(d));
-        let w = DVec2::new(z, p.x);
+        Ok((p, z, inside))
+    }
+
+    /// Step 3 of the inverse (module docs): hip pitch, knee and ankle that
+    /// put the foot at `w` (complex form, rolled hip frame), and whether the
+    /// wrist was projected onto the reachable annulus.
+    #[inline]
+    fn pitch_chain(
+        &self,
+        w: DVec2,
+        opts: &IkOptions,
+        clamp: bool,
+    ) -> Result<(f64, f64, f64, bool), IkError> {
         let sign = opts.knee.sign(NOMINAL_BEND);
         let [w1, w2, w3, w4] = self.links;
-        let (pitch, knee, ankle, out) = match opts.ankle {
+        Ok(match opts.ankle {
             AnkleMode::FootPitch(psi) => {
                 let wrist = w - w1 - cmul(cis(psi), w4);
-                let (t2, t3, out) = two_link(w2, w3, wrist, sign, clamp)?;
+                let (t2, t3, out) = two_link_links(&self.thigh, &self.shank, wrist, sign, clamp)?;
                 (t2, t3, wrap_angle(psi - t2 - t3), out)
             }
             AnkleMode::Angle(a4) => {
@@ -231,8 +273,7 @@ impl Quad16Leg {
                 let (t2, t3, out) = two_link(w2, u3, w - w1, sign, clamp)?;
                 (t2, t3, a4, out)
             }
-        };
-        Ok(([roll, pitch, knee, ankle], inside || out))
+        })
     }
 
     /// The leg's Jacobian (m/rad, base frame): column k is `∂ foot / ∂ a[k]`.
