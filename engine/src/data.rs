@@ -152,6 +152,7 @@ impl Data {
 
     /// A spare of `pool` (full workspaces when `dynamics`, else
     /// kinematics-only) fitted to `model`, its cache cleared, lent to `f`.
+    #[allow(clippy::vec_box)] // boxed spares: lending one moves a pointer
     fn with_pooled<R>(
         pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<Box<Data>>>>,
         model: &Model,
