@@ -92,17 +92,22 @@ mod tests {
 
     /// The linear momentum on its own is the linear part of the spatial
     /// momentum bit for bit (same terms, same order), on a moving quad16.
-    #[test]
-    fn linear_momentum_is_the_spatial_momentums_linear_part() {
+    /// quad16 moved off the origin, with joint and base speeds `speed(i)`,
+    /// after forward kinematics.
+    fn moving_quad16(speed: impl Fn(f64) -> f64) -> (Model, Data) {
         let desc = builtin("quad16").unwrap();
         let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
         let mut data = Data::new(&model);
         let mut q = crate::robots::nominal_q("quad16").unwrap();
         q[0] = 0.3;
-        let v: Vec<f64> = (0..model.nv)
-            .map(|i| ((i as f64) * 0.7).sin() * 1.5)
-            .collect();
+        let v: Vec<f64> = (0..model.nv).map(|i| speed(i as f64)).collect();
         forward_kinematics(&model, &mut data, &q, &v);
+        (model, data)
+    }
+
+    #[test]
+    fn linear_momentum_is_the_spatial_momentums_linear_part() {
+        let (model, data) = moving_quad16(|i| (i * 0.7).sin() * 1.5);
         let p = linear_momentum(&model, &data);
         assert!(p.length() > 0.1, "the state moves: {p}");
         assert_eq!(p.to_array(), spatial_momentum(&model, &data).lin.to_array());
@@ -111,15 +116,7 @@ mod tests {
     /// The one-pass CoM and CoM velocity are the separate functions' bits.
     #[test]
     fn com_and_velocity_is_both_functions() {
-        let desc = builtin("quad16").unwrap();
-        let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
-        let mut data = Data::new(&model);
-        let mut q = crate::robots::nominal_q("quad16").unwrap();
-        q[0] = 0.3;
-        let v: Vec<f64> = (0..model.nv)
-            .map(|i| ((i as f64) * 0.9).cos() * 1.2)
-            .collect();
-        forward_kinematics(&model, &mut data, &q, &v);
+        let (model, data) = moving_quad16(|i| (i * 0.9).cos() * 1.2);
         let (c, vc) = com_and_velocity(&model, &data);
         assert_eq!(c.to_array(), center_of_mass(&model, &data).to_array());
         assert_eq!(vc.to_array(), com_velocity(&model, &data).to_array());
