@@ -90,8 +90,6 @@ mod tests {
     use crate::model::BaseKind;
     use crate::robots::builtin;
 
-    /// The linear momentum on its own is the linear part of the spatial
-    /// momentum bit for bit (same terms, same order), on a moving quad16.
     /// quad16 moved off the origin, with joint and base speeds `speed(i)`,
     /// after forward kinematics.
     fn moving_quad16(speed: impl Fn(f64) -> f64) -> (Model, Data) {
@@ -105,6 +103,8 @@ mod tests {
         (model, data)
     }
 
+    /// The linear momentum on its own is the linear part of the spatial
+    /// momentum bit for bit (same terms, same order), on a moving quad16.
     #[test]
     fn linear_momentum_is_the_spatial_momentums_linear_part() {
         let (model, data) = moving_quad16(|i| (i * 0.7).sin() * 1.5);

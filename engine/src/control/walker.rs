@@ -36,7 +36,7 @@
 //! legs are driven. Sign conventions: see [`super::force_qp`] (torques) and
 //! [`super::vmc`] (wrench).
 
-use crate::com::{center_of_mass, com_velocity};
+use crate::com::com_and_velocity;
 use crate::data::Data;
 use crate::description::RobotDescription;
 use crate::gait::placement::{PlacementInput, PlacementParams, foot_target_world, raibert_offset};
@@ -612,8 +612,7 @@ impl Walker {
         let p_base = base.trans;
         let v_base = data.vel[0].lin;
         let w_base = data.vel[0].ang;
-        let com = center_of_mass(model, data);
-        let com_vel = com_velocity(model, data);
+        let (com, com_vel) = com_and_velocity(model, data);
         let yaw = rpy_from_rot(rot).z;
         let heading = DMat3::from_rotation_z(yaw);
 
