@@ -334,29 +334,12 @@ impl ActiveSet {
         let n = size::<N>(n);
         let iq = self.iq;
         for jj in (iq + 1..n).rev() {
-            let (mut cc, mut ss) = (d[jj - 1], d[jj]);
-            let h = cc.hypot(ss);
-            if h == 0.0 {
+            let Some((g, h)) = Givens::zeroing(d[jj - 1], d[jj]) else {
                 continue;
-            }
-            d[jj] = 0.0;
-            ss /= h;
-            cc /= h;
-            if cc < 0.0 {
-                cc = -cc;
-                ss = -ss;
-                d[jj - 1] = -h;
-            } else {
-                d[jj - 1] = h;
-            }
-            let xny = ss / (1.0 + cc);
+            };
+            (d[jj - 1], d[jj]) = (h, 0.0);
             let (head, tail) = self.jt.split_at_mut(jj);
-            let (a, b) = (&mut head[jj - 1][..n], &mut tail[0][..n]);
-            for (ja, jb) in a.iter_mut().zip(b.iter_mut()) {
-                let (t1, t2) = (*ja, *jb);
-                *ja = t1 * cc + t2 * ss;
-                *jb = xny * (t1 + *ja) - t2;
-            }
+            g.apply(&mut head[jj - 1][..n], &mut tail[0][..n]);
         }
         self.iq += 1;
         for i in 0..self.iq {
@@ -397,35 +380,56 @@ impl ActiveSet {
             return;
         }
         for jj in qq..iq {
-            let (mut cc, mut ss) = (self.r[jj][jj], self.r[jj + 1][jj]);
-            let h = cc.hypot(ss);
-            if h == 0.0 {
+            let Some((g, h)) = Givens::zeroing(self.r[jj][jj], self.r[jj + 1][jj]) else {
                 continue;
-            }
-            cc /= h;
-            ss /= h;
-            self.r[jj + 1][jj] = 0.0;
-            if cc < 0.0 {
-                self.r[jj][jj] = -h;
-                cc = -cc;
-                ss = -ss;
-            } else {
-                self.r[jj][jj] = h;
-            }
-            let xny = ss / (1.0 + cc);
-            for k in jj + 1..iq {
-                let t1 = self.r[jj][k];
-                let t2 = self.r[jj + 1][k];
-                self.r[jj][k] = t1 * cc + t2 * ss;
-                self.r[jj + 1][k] = xny * (t1 + self.r[jj][k]) - t2;
-            }
+            };
+            (self.r[jj][jj], self.r[jj + 1][jj]) = (h, 0.0);
+            let (head, tail) = self.r.split_at_mut(jj + 1);
+            g.apply(&mut head[jj][jj + 1..iq], &mut tail[0][jj + 1..iq]);
             let (head, tail) = self.jt.split_at_mut(jj + 1);
-            let (a, b) = (&mut head[jj][..n], &mut tail[0][..n]);
-            for (ja, jb) in a.iter_mut().zip(b.iter_mut()) {
-                let (t1, t2) = (*ja, *jb);
-                *ja = t1 * cc + t2 * ss;
-                *jb = xny * (*ja + t1) - t2;
-            }
+            g.apply(&mut head[jj][..n], &mut tail[0][..n]);
+        }
+    }
+}
+
+/// A Givens rotation in QuadProg++'s form: `c`, `s` and `xny = s / (1 + c)`,
+/// with `c ≥ 0`.
+#[derive(Clone, Copy)]
+struct Givens {
+    c: f64,
+    s: f64,
+    xny: f64,
+}
+
+impl Givens {
+    /// The rotation taking `(a, b)` to `(h, 0)`, and `h` (`±|(a, b)|`, the
+    /// sign making `c ≥ 0`); `None` when both are zero (nothing to rotate).
+    #[inline(always)]
+    fn zeroing(a: f64, b: f64) -> Option<(Givens, f64)> {
+        let h = a.hypot(b);
+        if h == 0.0 {
+            return None;
+        }
+        let (c, s) = (a / h, b / h);
+        let (c, s, h) = if c < 0.0 { (-c, -s, -h) } else { (c, s, h) };
+        Some((
+            Givens {
+                c,
+                s,
+                xny: s / (1.0 + c),
+            },
+            h,
+        ))
+    }
+
+    /// Rotates the pairs `(x[k], y[k])`: `x' = c x + s y`, `y' = xny (x + x') − y`
+    /// (QuadProg++'s update, one product fewer than `s x − c y`).
+    #[inline(always)]
+    fn apply(self, x: &mut [f64], y: &mut [f64]) {
+        for (xk, yk) in x.iter_mut().zip(y.iter_mut()) {
+            let (t1, t2) = (*xk, *yk);
+            *xk = t1 * self.c + t2 * self.s;
+            *yk = self.xny * (t1 + *xk) - t2;
         }
     }
 }
