@@ -89,22 +89,11 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
 /// Whether one of the body points (body index, point in the body frame) is
 /// at or below the terrain: its closest surface point's depth is ≥ 0.
 fn any_point_in_ground(terrain: &TerrainUnion, data: &Data, points: &[(usize, DVec3)]) -> bool {
-    match (terrain.patches().is_empty(), terrain.default_ground()) {
-        // The default plane alone (flat ground): `closest` answers with the
-        // plane, depth `height − z`; the same test without the general
-        // query's per-point bookkeeping.
-        (true, Some(ground)) => {
-            let h = ground.height_m;
-            points
-                .iter()
-                .any(|&(b, p)| h - data.body_point_world(b, p).z >= 0.0)
-        }
-        _ => points.iter().any(|&(b, p)| {
-            terrain
-                .closest(data.body_point_world(b, p))
-                .is_some_and(|sp| sp.depth_m >= 0.0)
-        }),
-    }
+    points.iter().any(|&(b, p)| {
+        terrain
+            .closest(data.body_point_world(b, p))
+            .is_some_and(|sp| sp.depth_m >= 0.0)
+    })
 }
 
 /// The tilt test `acos(z) > max_tilt_rad`, with `z` the world z component
