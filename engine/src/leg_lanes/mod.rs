@@ -117,6 +117,25 @@ mod tests {
         x.iter().map(|e| e.to_bits()).collect()
     }
 
+    /// The built-in `name` on `base` (legs in lanes where its shape allows)
+    /// and the same model on the general path (`leg_lanes = None`).
+    fn fast_and_general(name: &str, base: BaseKind) -> (Model, Model) {
+        let desc = crate::robots::builtin(name).unwrap();
+        let fast = Model::from_description(&desc, base).unwrap();
+        let mut general = fast.clone();
+        general.leg_lanes = None;
+        (fast, general)
+    }
+
+    /// Distinct external forces on every body (after kinematics).
+    fn set_external_forces(d: &mut Data) {
+        for (i, f) in d.f_ext.iter_mut().enumerate() {
+            let k = i as f64;
+            f.lin = DVec3::new(3.0 * k - 10.0, 0.5 * k, 40.0 - k);
+            f.ang = DVec3::new(0.1 * k, -0.2, 0.3 * k - 1.0);
+        }
+    }
+
     /// Every output of kinematics and ABA, legs in lanes against the general
     /// path (the same model with `leg_lanes = None`), bit for bit, at random
     /// states with and without external forces, on quad16 (floating and
@@ -128,13 +147,10 @@ mod tests {
             ("quad16", BaseKind::Fixed),
             ("quad12", BaseKind::Floating),
         ] {
-            let desc = crate::robots::builtin(name).unwrap();
-            let fast = Model::from_description(&desc, base).unwrap();
+            let (fast, general) = fast_and_general(name, base);
             if name == "quad16" {
                 assert!(fast.leg_lanes.is_some(), "{name} has its legs in lanes");
             }
-            let mut general = fast.clone();
-            general.leg_lanes = None;
             let mut r = ChaCha8Rng::seed_from_u64(7);
             for trial in 0..50 {
                 let mut q = fast.neutral_q();
@@ -168,11 +184,7 @@ mod tests {
                     let mut d = Data::new(m);
                     if external {
                         forward_kinematics(m, &mut d, &q, &v);
-                        for (i, f) in d.f_ext.iter_mut().enumerate() {
-                            let k = i as f64;
-                            f.lin = DVec3::new(3.0 * k - 10.0, 0.5 * k, 40.0 - k);
-                            f.ang = DVec3::new(0.1 * k, -0.2, 0.3 * k - 1.0);
-                        }
+                        set_external_forces(&mut d);
                         aba_from_kinematics(m, &mut d, &v, &tau, true);
                     } else {
                         aba(m, &mut d, &q, &v, &tau);
@@ -207,11 +219,8 @@ mod tests {
     fn rnea_in_lanes_gives_the_general_paths_bits() {
         use crate::rnea::rnea_from_kinematics;
         for base in [BaseKind::Floating, BaseKind::Fixed] {
-            let desc = crate::robots::builtin("quad16").unwrap();
-            let fast = Model::from_description(&desc, base).unwrap();
+            let (fast, general) = fast_and_general("quad16", base);
             assert!(fast.leg_lanes.is_some());
-            let mut general = fast.clone();
-            general.leg_lanes = None;
             let mut r = ChaCha8Rng::seed_from_u64(11);
             for trial in 0..50 {
                 let mut q = fast.neutral_q();
@@ -238,11 +247,7 @@ mod tests {
                 for m in [&fast, &general] {
                     let mut d = Data::new(m);
                     forward_kinematics(m, &mut d, &q, &v);
-                    for (i, f) in d.f_ext.iter_mut().enumerate() {
-                        let k = i as f64;
-                        f.lin = DVec3::new(3.0 * k - 10.0, 0.5 * k, 40.0 - k);
-                        f.ang = DVec3::new(0.1 * k, -0.2, 0.3 * k - 1.0);
-                    }
+                    set_external_forces(&mut d);
                     rnea_from_kinematics(m, &mut d, &v, &a, external);
                     let mut all = d.tau.clone();
                     for i in 0..m.nbodies {
