@@ -295,10 +295,7 @@ mod tests {
     /// path) leaves the lanes' velocities consistent with the per-body ones.
     #[test]
     fn velocity_only_update_keeps_the_lanes_current() {
-        let desc = crate::robots::builtin("quad16").unwrap();
-        let fast = Model::from_description(&desc, BaseKind::Floating).unwrap();
-        let mut general = fast.clone();
-        general.leg_lanes = None;
+        let (fast, general) = fast_and_general("quad16", BaseKind::Floating);
         let q = fast.neutral_q();
         let v0 = vec![0.3; fast.nv];
         let v1: Vec<f64> = (0..fast.nv).map(|k| 0.1 * k as f64 - 1.0).collect();
@@ -319,11 +316,8 @@ mod tests {
     /// one, on the full and the velocity-only path, in lanes and not.
     #[test]
     fn kinematics_only_data_gets_the_same_kinematics() {
-        let desc = crate::robots::builtin("quad16").unwrap();
-        let lanes = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        let (lanes, general) = fast_and_general("quad16", BaseKind::Floating);
         assert!(lanes.leg_lanes.is_some());
-        let mut general = lanes.clone();
-        general.leg_lanes = None;
         for m in [lanes, general] {
             kinematics_only_matches(&m);
         }
