@@ -23,12 +23,44 @@ use crate::metrics::record_robot;
 use crate::sense::sense_robot;
 use crate::step::{count_step, for_each_lane_group, lanes_on, plan_groups, step_group};
 
+/// How many consecutive steps one run of the step schedule takes every robot
+/// through (at least 1; absent means 1). [`Simulation::run`](crate::Simulation::run)
+/// sets it for runs of steps at which nothing outside the robots looks at the
+/// world (no compile due, no log or monitor sample, no pose copy, no payload
+/// event, no system added to the schedule), so that each block of robots goes
+/// through several steps while its data is in the core's cache; it is 1
+/// between such runs.
+///
+/// Robots do not interact, so a robot meets the same calls with the same
+/// inputs either way, and the bits are the same
+/// (`tests/fused_steps.rs`).
+#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PassSteps(u64);
+
+impl PassSteps {
+    /// One step per pass.
+    pub const ONE: Self = Self(1);
+
+    /// `steps` per pass (at least 1).
+    pub(crate) fn new(steps: u64) -> Self {
+        Self(steps.max(1))
+    }
+
+    /// Steps per pass.
+    pub fn get(self) -> u64 {
+        self.0
+    }
+}
+
 /// The step's robot pass: every robot's per-robot stages of this step, in
 /// the schedule's stage order, laid over the robots by [`StageLayout`] on
 /// the world's thread pool; then the clock counts the step (as
 /// [`advance_clock`](crate::advance_clock) does). Runs in the `Integrate`
 /// set; world-level systems in the earlier sets run before it in either
-/// layout, those in `Publish` after the clock has moved.
+/// layout, those in `Publish` after the clock has moved. With
+/// [`PassSteps`] above 1 it takes every robot through that many steps
+/// (each step's stages in order, block by block or stage by stage) and
+/// counts them all.
 ///
 /// - [`StageLayout::RobotBlocks`] (the default, also for a world without
 ///   the resource): each block of a few consecutive robots goes through all
@@ -63,12 +95,14 @@ pub fn step_robot_pass(
     config: Res<SimConfig>,
     batching: Option<Res<LaneBatching>>,
     layout: Option<Res<StageLayout>>,
+    pass: Option<Res<PassSteps>>,
     mut groups: Local<Vec<usize>>,
     mut blocks: Local<Vec<usize>>,
 ) {
-    let t_s = clock.time_s;
-    let tick = is_control_tick(clock.step, &rate);
+    let steps = pass.map_or(1, |p| p.get());
+    let (step0, t0_s) = (clock.step, clock.time_s);
     let control_dt_s = clock_dt(&rate, &config);
+    let rate = *rate;
     let (dt_s, integrator) = (config.dt_s, config.integrator);
     let saturate = config.passive.saturation;
     let lanes = lanes_on(&config, batching.as_deref());
@@ -78,30 +112,47 @@ pub fn step_robot_pass(
         StageLayout::RobotBlocks { robots } => {
             plan_blocks(&groups, robots, &mut blocks);
             pool.for_each_group(sims, &blocks, |block| {
-                for sim in block.iter_mut() {
-                    sense_robot(sim, t_s);
-                }
-                for sim in block.iter_mut() {
-                    control_stage(sim, t_s, tick, control_dt_s);
-                }
-                for sim in block.iter_mut() {
-                    observe_robot(sim, t_s);
-                }
-                for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
-                for sim in block.iter_mut() {
-                    record_robot(sim, dt_s, saturate);
+                for j in 0..steps {
+                    let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
+                    for sim in block.iter_mut() {
+                        sense_robot(sim, t_s);
+                    }
+                    for sim in block.iter_mut() {
+                        control_stage(sim, t_s, tick, control_dt_s);
+                    }
+                    for sim in block.iter_mut() {
+                        observe_robot(sim, t_s);
+                    }
+                    for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
+                    for sim in block.iter_mut() {
+                        record_robot(sim, dt_s, saturate);
+                    }
                 }
             });
         }
         StageLayout::StageMajor => {
-            pool.for_each(sims, |sim| sense_robot(sim, t_s));
-            pool.for_each(sims, |sim| control_stage(sim, t_s, tick, control_dt_s));
-            pool.for_each(sims, |sim| observe_robot(sim, t_s));
-            pool.for_each_group(sims, &groups, |group| step_group(group, dt_s, integrator));
-            pool.for_each(sims, |sim| record_robot(sim, dt_s, saturate));
+            for j in 0..steps {
+                let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
+                pool.for_each(sims, |sim| sense_robot(sim, t_s));
+                pool.for_each(sims, |sim| control_stage(sim, t_s, tick, control_dt_s));
+                pool.for_each(sims, |sim| observe_robot(sim, t_s));
+                pool.for_each_group(sims, &groups, |group| step_group(group, dt_s, integrator));
+                pool.for_each(sims, |sim| record_robot(sim, dt_s, saturate));
+            }
         }
     }
-    count_step(&mut clock, dt_s);
+    for _ in 0..steps {
+        count_step(&mut clock, dt_s);
+    }
+}
+
+/// The time (s) and controller tick of the `j`-th step of a pass that starts
+/// at clock step `step0` and time `t0_s`: the clock's values had it counted
+/// the `j` steps before ([`count_step`]).
+fn step_time(step0: u64, t0_s: f64, j: u64, dt_s: f64, rate: &ControlRate) -> (f64, bool) {
+    let step = step0 + j;
+    let t_s = if j == 0 { t0_s } else { step as f64 * dt_s };
+    (t_s, is_control_tick(step, rate))
 }
 
 /// Merges consecutive lane groups (exclusive `group_ends`) into blocks of at

@@ -25,7 +25,7 @@ mod sense;
 mod simulation;
 mod step;
 
-pub use blocks::{plan_blocks, step_robot_pass};
+pub use blocks::{PassSteps, plan_blocks, step_robot_pass};
 pub use compile::{
     CompileGate, CompileSchedule, DirtyRobots, SharedModels, add_edit_observers,
     build_compile_schedule, compile_dirty_robots, mark_dirty_robots,
@@ -47,5 +47,5 @@ pub use schedule::{
     register_dynamics, register_gait, register_integrate, register_publish, register_sense,
 };
 pub use sense::{sense_robot, sense_robots};
-pub use simulation::Simulation;
+pub use simulation::{MAX_PASS_STEPS, Simulation};
 pub use step::{advance_clock, plan_groups, step_robot, step_robots};

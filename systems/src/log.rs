@@ -625,7 +625,7 @@ pub fn log_due<C: SampleChannel>(clock: Res<SimClock>, logger: Option<Res<Logger
 }
 
 /// Whether `logger` samples or snapshots at step `step` (see [`log_due`]).
-fn logger_due<C: SampleChannel>(logger: &Logger<C>, step: u64) -> bool {
+pub(crate) fn logger_due<C: SampleChannel>(logger: &Logger<C>, step: u64) -> bool {
     let every = logger.every_steps;
     step.is_multiple_of(every) || (step > 0 && (step - 1).is_multiple_of(every))
 }

@@ -10,6 +10,7 @@ use quadsim_components::{
 use quadsim_engine::BaseKind;
 use quadsim_engine::description::RobotDescription;
 
+use crate::blocks::PassSteps;
 use crate::compile::{
     CompileGate, DirtyRobots, SharedModels, add_edit_observers, build_compile_schedule,
 };
@@ -44,7 +45,20 @@ pub struct Simulation {
     compile: Schedule,
     compile_gate: CompileGate,
     step: Schedule,
+    /// Whether the step schedule was handed out ([`Simulation::step_schedule_mut`]):
+    /// systems may have been added that look at the world after every step.
+    step_schedule_lent: bool,
+    /// Runs of the step schedule so far.
+    passes: u64,
 }
+
+/// The most steps [`Simulation::run`] takes the robots through in one pass
+/// ([`PassSteps`]). Each block of robots is then fetched into the core's
+/// cache once per pass rather than once per step. On the project machine
+/// (`quadsim bench`, quad16 trotting, 1 thread) a robot-step at 1,000
+/// robots cost 1.26–1.38× one at 64 with one step per pass, about 1.25×
+/// with 8, 1.02–1.07× with 32 and 1.02–1.04× with 64.
+pub const MAX_PASS_STEPS: u64 = 64;
 
 impl std::fmt::Debug for Simulation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -79,6 +93,8 @@ impl Simulation {
             compile: build_compile_schedule(),
             compile_gate,
             step: build_step_schedule(),
+            step_schedule_lent: false,
+            passes: 0,
         })
     }
 
@@ -120,20 +136,92 @@ impl Simulation {
             self.compile.run(&mut self.world);
         }
         self.step.run(&mut self.world);
+        self.passes += 1;
     }
 
-    /// Runs `steps` fixed steps.
+    /// Runs `steps` fixed steps, with the same result, bit for bit, as
+    /// calling [`Simulation::step`] `steps` times.
+    ///
+    /// Where nothing outside the robots looks at the world between steps
+    /// ([`Simulation::quiet_steps`]), one run of the step schedule takes the
+    /// robots through up to [`MAX_PASS_STEPS`] steps ([`PassSteps`]): each
+    /// block of robots stays in the core's cache for all of them, and the
+    /// schedules' fixed cost is paid once.
     pub fn run(&mut self, steps: u64) {
         let pool = self.world.resource::<SimThreadPool>().shared();
         pool.install(|| {
-            for _ in 0..steps {
-                self.step();
+            let mut left = steps;
+            while left > 0 {
+                let n = if self.compile_gate.due(&self.world) {
+                    self.compile.run(&mut self.world);
+                    1
+                } else {
+                    self.quiet_steps(left.min(MAX_PASS_STEPS))
+                };
+                if n > 1 {
+                    self.world.insert_resource(PassSteps::new(n));
+                    self.step.run(&mut self.world);
+                    self.world.insert_resource(PassSteps::ONE);
+                } else {
+                    self.step.run(&mut self.world);
+                }
+                self.passes += 1;
+                left -= n;
             }
         });
     }
 
+    /// How many of the next steps (1 to `max`) can run in one pass: the
+    /// step schedule holds only its own systems, and after each step but
+    /// the last no log or monitor sample ([`Logger`](crate::Logger)), no
+    /// pose copy ([`PoseSync`]) and no payload event
+    /// ([`PayloadEvents`](quadsim_components::PayloadEvents)) is due; the
+    /// caller has checked that no compile is due before the first. Nothing
+    /// else outside the robots changes between steps, so a robot meets the
+    /// same calls with the same inputs as step by step.
+    fn quiet_steps(&self, max: u64) -> u64 {
+        if self.step_schedule_lent {
+            return 1;
+        }
+        let w = &self.world;
+        let (Some(clock), Some(config)) =
+            (w.get_resource::<SimClock>(), w.get_resource::<SimConfig>())
+        else {
+            return 1;
+        };
+        let pose = w.get_resource::<PoseSync>();
+        let log = w.get_resource::<crate::Logger<crate::LogChannel>>();
+        let monitor = w.get_resource::<crate::Logger<crate::MonitorChannel>>();
+        let events = w
+            .get_resource::<quadsim_components::PayloadEvents>()
+            .filter(|e| e.applied < e.events.len());
+        // steps after which the world is looked at (the Publish stage's
+        // conditions, then the compile gate before the next step)
+        let busy = |step: u64| {
+            pose.is_some_and(|p| p.due(step))
+                || log.is_some_and(|l| crate::log::logger_due(l, step))
+                || monitor.is_some_and(|l| crate::log::logger_due(l, step))
+                || events.is_some_and(|e| crate::payload::payload_due(e, step as f64 * config.dt_s))
+        };
+        let mut n = 1;
+        while n < max && !busy(clock.step + n) {
+            n += 1;
+        }
+        n
+    }
+
+    /// How many times the step schedule has run: once per
+    /// [`Simulation::step`], once per pass of up to [`MAX_PASS_STEPS`] steps
+    /// in [`Simulation::run`].
+    pub fn passes(&self) -> u64 {
+        self.passes
+    }
+
     /// The step schedule, to add systems to the [`crate::SimSystems`] sets.
+    /// From then on [`Simulation::run`] runs the schedule once per step, as
+    /// such systems may look at the world after every step.
     pub fn step_schedule_mut(&mut self) -> &mut Schedule {
+        self.step_schedule_lent = true;
         &mut self.step
     }
 
@@ -141,6 +229,7 @@ impl Simulation {
     /// "never compile inside a step" rule).
     pub fn run_step_schedule(&mut self) {
         self.step.run(&mut self.world);
+        self.passes += 1;
     }
 
     /// The clock.
