@@ -48,6 +48,13 @@ pub struct RobotSensing {
     pub updates: SensorUpdates,
     /// Scratch: each foot's true normal force (N).
     pub foot_force_n: Vec<f64>,
+    /// Whether the robot's `data` holds the kinematics of its current
+    /// `(q, v)` as the `Sense` stage computed them this step, so that the
+    /// `Contact` stage need not compute them again. Set by the `Sense` stage
+    /// after its kinematics, cleared by anything that writes `data` or the
+    /// state before the `Contact` stage (a controller ticking on `data`)
+    /// and by the `Contact` stage itself.
+    pub data_at_state: bool,
 }
 
 impl RobotSensing {
@@ -69,6 +76,7 @@ impl RobotSensing {
             contacts: vec![false; n_feet],
             errors: EstimationErrors::default(),
             updates: SensorUpdates::default(),
+            data_at_state: false,
             foot_force_n: vec![0.0; n_feet],
         }
     }

@@ -31,7 +31,9 @@ pub fn height_above_ground(terrain: &TerrainUnion, p: DVec3) -> f64 {
     terrain.height(p.x, p.y).map_or(f64::INFINITY, |h| p.z - h)
 }
 
-/// One robot: kinematics at `(q, v)`, contact update, observation, fall check.
+/// One robot: kinematics at `(q, v)` (unless the `Sense` stage left them
+/// in `data`, [`RobotSensing::data_at_state`](quadsim_components::RobotSensing::data_at_state)),
+/// contact update, observation, fall check.
 pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     let RobotSim {
         model,
@@ -39,9 +41,16 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
         state,
         contact,
         run,
+        sensing,
         ..
     } = sim;
-    forward_kinematics(model, data, &state.q, &state.v);
+    // The `Sense` stage may have computed them this step, at this state.
+    let fresh = sensing
+        .as_deref_mut()
+        .is_some_and(|s| std::mem::take(&mut s.data_at_state));
+    if !fresh {
+        forward_kinematics(model, data, &state.q, &state.v);
+    }
     update_after_step(&contact.points, data, &contact.terrain, &mut contact.states);
     contact.time_s = t_s;
     let obs = &mut run.observation;
