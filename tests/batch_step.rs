@@ -69,7 +69,7 @@ stiffness_npm = 631.7
 damping_nspm = 10.05
 "#;
 
-fn world(threads: usize, lanes: bool) -> World {
+fn world(threads: usize, lanes: LaneBatching) -> World {
     let scn = parse_scenario(Path::new("batch_step.toml"), HERDS.to_string()).unwrap();
     let mut w = build_world(
         &scn,
@@ -79,7 +79,7 @@ fn world(threads: usize, lanes: bool) -> World {
         },
     )
     .unwrap();
-    w.sim.world.insert_resource(LaneBatching(lanes));
+    w.sim.world.insert_resource(lanes);
     w
 }
 
@@ -106,12 +106,12 @@ fn fingerprint(w: &World) -> Vec<(String, Vec<u64>)> {
 
 #[test]
 fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
-    let mut lanes = world(2, true);
-    let mut scalar = world(1, false);
+    let mut lanes = world(2, LaneBatching::AcrossRobots);
+    let mut scalar = world(1, LaneBatching::Off);
     // The lanes are really used: each herd makes one group of four.
     let mut ends = Vec::new();
     let batch = lanes.sim.world.resource::<RobotBatch>();
-    quadsim_systems::plan_groups(&batch.sims, true, &mut ends);
+    quadsim_systems::plan_groups(&batch.sims, LaneBatching::AcrossRobots, &mut ends);
     let sizes: Vec<usize> = std::iter::once(0)
         .chain(ends.iter().copied())
         .collect::<Vec<_>>()
@@ -119,12 +119,33 @@ fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
         .map(|w| w[1] - w[0])
         .collect();
     assert_eq!(sizes, [4, 1, 4, 1, 4, 1], "groups by model");
+    // By default a robot whose legs run in lanes on this CPU steps alone.
+    let mut auto = world(2, LaneBatching::Auto);
+    let batch = auto.sim.world.resource::<RobotBatch>();
+    quadsim_systems::plan_groups(&batch.sims, LaneBatching::Auto, &mut ends);
+    let mut expected = Vec::new();
+    let mut start = 0;
+    for size in sizes {
+        let legs = quadsim_engine::leg_lanes::runs_on(&batch.sims[start].model);
+        let alone = [1].repeat(size);
+        expected.extend(if legs { alone } else { vec![size] });
+        start += size;
+    }
+    let auto_sizes: Vec<usize> = std::iter::once(0)
+        .chain(ends.iter().copied())
+        .collect::<Vec<_>>()
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .collect();
+    assert_eq!(auto_sizes, expected, "groups by model, legs in lanes alone");
     let steps = 600;
     for step in 0..steps {
         lanes.sim.step();
         scalar.sim.step();
+        auto.sim.step();
         if step % 100 == 99 {
             assert_eq!(fingerprint(&lanes), fingerprint(&scalar), "step {step}");
+            assert_eq!(fingerprint(&auto), fingerprint(&scalar), "step {step}");
         }
     }
     // The robots moved (the comparison is not of robots at rest): the
@@ -153,11 +174,11 @@ fn herd_stepped_block_by_block_equals_herd_stepped_stage_by_stage_bit_for_bit() 
     // blocks of 4 (the lane groups) and 8 on two threads against the
     // stage-major layout on one; the herds have noisy sensors and the
     // estimator on (the defaults), so the Sense stage is in the comparison
-    let mut stages = world(1, true);
+    let mut stages = world(1, LaneBatching::AcrossRobots);
     stages.sim.world.insert_resource(StageLayout::StageMajor);
     let mut blocks: Vec<World> = [4, 8]
         .map(|robots| {
-            let mut w = world(2, true);
+            let mut w = world(2, LaneBatching::AcrossRobots);
             w.sim
                 .world
                 .insert_resource(StageLayout::RobotBlocks { robots });

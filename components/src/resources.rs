@@ -167,17 +167,32 @@ fn split_groups<T: Send, F: Fn(&mut [T]) + Sync>(
     );
 }
 
-/// Whether the step puts robots of one model into SIMD lanes, four at a time
-/// ([`quadsim_engine::batch`]). On by default. The batched dynamics are
-/// bit-identical to the scalar step, so this changes speed only; off is for
-/// comparisons and tests.
-#[derive(Resource, Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LaneBatching(pub bool);
+/// Whether the step puts robots of one model into SIMD lanes across
+/// robots, four at a time ([`quadsim_engine::batch`]). The batched dynamics
+/// are bit-identical to the scalar step, so this changes speed only.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LaneBatching {
+    /// Every robot stepped alone (comparisons and tests).
+    Off,
+    /// Robots in lanes across robots, except those whose model runs its
+    /// four legs in lanes within the robot on this CPU
+    /// ([`quadsim_engine::leg_lanes::runs_on`]): quad16 and quad12 step
+    /// faster alone that way (docs/batch.md, "Lanes across robots or across
+    /// legs"). The default.
+    #[default]
+    Auto,
+    /// Robots of one model always in lanes across robots.
+    AcrossRobots,
+}
 
-impl Default for LaneBatching {
-    /// On.
-    fn default() -> Self {
-        Self(true)
+impl LaneBatching {
+    /// Whether robots of `model` go into lanes across robots.
+    pub fn across_robots(self, model: &quadsim_engine::Model) -> bool {
+        match self {
+            Self::Off => false,
+            Self::Auto => !quadsim_engine::leg_lanes::runs_on(model),
+            Self::AcrossRobots => true,
+        }
     }
 }
 

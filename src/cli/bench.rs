@@ -44,10 +44,13 @@ pub struct BenchArgs {
     /// Robot model: `quad16` (trotting under VMC at 0.5 m/s) or `quad12` (standing under joint PD).
     #[arg(long, default_value = "quad16")]
     pub model: String,
-    /// Step the robots one by one instead of four of one model at a time in
-    /// SIMD lanes (the results are the same; for comparing the speed).
-    #[arg(long)]
-    pub no_lanes: bool,
+    /// SIMD lanes across robots: `auto` (four robots of one model at a
+    /// time, unless each robot runs its four legs in lanes, which quad16
+    /// and quad12 do on an AVX2 CPU), `across-robots` (always four robots at
+    /// a time) or `off` (each robot alone). The results are the same; for
+    /// comparing the speed.
+    #[arg(long, value_enum, default_value_t = BenchLanes::Auto)]
+    pub lanes: BenchLanes,
     /// Robots per block of the step's robot pass (each block goes through
     /// sense, control, contact, integration and metrics while in cache);
     /// 0 runs each stage over every robot in turn instead (the results are
@@ -63,6 +66,28 @@ pub struct BenchArgs {
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
+}
+
+/// SIMD lanes across robots (`quadsim bench --lanes`; see
+/// [`quadsim_components::LaneBatching`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchLanes {
+    /// Across robots unless a robot's legs run in lanes.
+    Auto,
+    /// Always four robots of one model at a time.
+    AcrossRobots,
+    /// Each robot alone.
+    Off,
+}
+
+impl From<BenchLanes> for quadsim_components::LaneBatching {
+    fn from(l: BenchLanes) -> Self {
+        match l {
+            BenchLanes::Auto => Self::Auto,
+            BenchLanes::AcrossRobots => Self::AcrossRobots,
+            BenchLanes::Off => Self::Off,
+        }
+    }
 }
 
 /// What the benchmarked controllers read (`quadsim bench --sensing`).
@@ -171,7 +196,7 @@ pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoin
     let mut w = build(robots)?;
     w.sim
         .world
-        .insert_resource(quadsim_components::LaneBatching(!a.no_lanes));
+        .insert_resource(quadsim_components::LaneBatching::from(a.lanes));
     w.sim.world.insert_resource(match a.block_robots {
         0 => quadsim_components::StageLayout::StageMajor,
         n => quadsim_components::StageLayout::RobotBlocks { robots: n },

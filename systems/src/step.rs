@@ -38,10 +38,14 @@ pub fn step_robots(
     pool.for_each_group(sims, &ends, |group| step_group(group, dt_s, integrator));
 }
 
-/// Whether robots go into SIMD lanes: with semi-implicit Euler, unless
-/// [`LaneBatching`] is off.
-pub(crate) fn lanes_on(config: &SimConfig, batching: Option<&LaneBatching>) -> bool {
-    config.integrator == Integrator::SemiImplicitEuler && batching.is_none_or(|b| b.0)
+/// Which robots go into SIMD lanes across robots: with semi-implicit Euler,
+/// as [`LaneBatching`] says (its default without the resource); none with RK4.
+pub(crate) fn lanes_on(config: &SimConfig, batching: Option<&LaneBatching>) -> LaneBatching {
+    if config.integrator == Integrator::SemiImplicitEuler {
+        batching.copied().unwrap_or_default()
+    } else {
+        LaneBatching::Off
+    }
 }
 
 /// Steps one group of [`plan_groups`]: in lanes when it has several robots.
@@ -62,9 +66,10 @@ fn lane_ready(sim: &RobotSim) -> bool {
 }
 
 /// Splits `sims` into groups (written as exclusive `ends`): runs of up to
-/// [`LANES`] consecutive lane-ready robots of one model when `lanes`, every
-/// other robot alone.
-pub fn plan_groups(sims: &[RobotSim], lanes: bool, ends: &mut Vec<usize>) {
+/// [`LANES`] consecutive lane-ready robots of one model that `lanes` puts in
+/// lanes across robots ([`LaneBatching::across_robots`]), every other robot
+/// alone.
+pub fn plan_groups(sims: &[RobotSim], lanes: LaneBatching, ends: &mut Vec<usize>) {
     ends.clear();
     let mut start = 0;
     while start < sims.len() {
@@ -74,11 +79,12 @@ pub fn plan_groups(sims: &[RobotSim], lanes: bool, ends: &mut Vec<usize>) {
 }
 
 /// Length of the group [`plan_groups`] starts at `sims[0]` (`sims` not empty).
-fn group_len(sims: &[RobotSim], lanes: bool) -> usize {
+fn group_len(sims: &[RobotSim], lanes: LaneBatching) -> usize {
     let first = &sims[0];
-    let joins = |sim: &RobotSim| {
-        lanes && lane_ready(first) && lane_ready(sim) && Arc::ptr_eq(&first.model, &sim.model)
-    };
+    if !(lane_ready(first) && lanes.across_robots(&first.model)) {
+        return 1;
+    }
+    let joins = |sim: &RobotSim| lane_ready(sim) && Arc::ptr_eq(&first.model, &sim.model);
     1 + sims[1..sims.len().min(LANES)]
         .iter()
         .take_while(|s| joins(s))
@@ -89,7 +95,7 @@ fn group_len(sims: &[RobotSim], lanes: bool) -> usize {
 /// without a list of groups (nothing allocated).
 pub(crate) fn for_each_lane_group(
     sims: &mut [RobotSim],
-    lanes: bool,
+    lanes: LaneBatching,
     mut f: impl FnMut(&mut [RobotSim]),
 ) {
     let mut rest = sims;

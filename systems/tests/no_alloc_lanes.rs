@@ -10,7 +10,7 @@ mod common;
 
 use std::alloc::System;
 
-use quadsim_components::SimConfig;
+use quadsim_components::{LaneBatching, SimConfig};
 use quadsim_engine::integrate::State;
 use quadsim_systems::Simulation;
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
@@ -22,6 +22,8 @@ static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 #[test]
 fn steady_state_steps_in_lanes_do_not_allocate() {
     let mut sim = Simulation::new(SimConfig::default(), 2).unwrap();
+    // quad16 steps alone (its legs in lanes) unless told otherwise
+    sim.world.insert_resource(LaneBatching::AcrossRobots);
     let quad16 = quadsim_engine::robots::builtin("quad16").unwrap();
     for seed in 0..30 {
         let mut d = quad16.clone();
@@ -33,7 +35,7 @@ fn steady_state_steps_in_lanes_do_not_allocate() {
     }
     let mut ends = Vec::new();
     let batch = sim.world.resource::<quadsim_components::RobotBatch>();
-    quadsim_systems::plan_groups(&batch.sims, true, &mut ends);
+    quadsim_systems::plan_groups(&batch.sims, LaneBatching::AcrossRobots, &mut ends);
     assert_eq!(ends.len(), 8, "groups of 4, 4, …, 2: {ends:?}");
     sim.run(20);
     let steps = 1000;

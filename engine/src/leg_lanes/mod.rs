@@ -54,6 +54,25 @@ pub struct LegLanes {
     pub(crate) steps: Vec<GroupStep>,
 }
 
+/// Whether ABA runs `m`'s four legs in lanes on this CPU: `m` has their
+/// shape ([`Model::leg_lanes`]) and the CPU has AVX2 and FMA, the clone
+/// ABA's dispatch takes the lanes in.
+pub fn runs_on(m: &Model) -> bool {
+    m.leg_lanes.is_some() && cpu_has_lanes()
+}
+
+/// Whether this CPU has what the lanes' clones need (AVX2 and FMA).
+#[cfg(target_arch = "x86_64")]
+fn cpu_has_lanes() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
+/// No lanes off x86-64.
+#[cfg(not(target_arch = "x86_64"))]
+fn cpu_has_lanes() -> bool {
+    false
+}
+
 impl LegLanes {
     /// The grouping of `m`, when every body but the base is on one of four
     /// unbranched chains from the base, all of one length, and the four
