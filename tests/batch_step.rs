@@ -137,6 +137,7 @@ fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
         .windows(2)
         .map(|w| w[1] - w[0])
         .collect();
+    println!("groups with LaneBatching::Auto: {auto_sizes:?}");
     assert_eq!(auto_sizes, expected, "groups by model, legs in lanes alone");
     let steps = 600;
     for step in 0..steps {

@@ -5,6 +5,7 @@
 //! passes cut where a log sample, a payload event or a timed command falls.
 
 use std::collections::BTreeMap;
+use std::path::Path;
 
 use quadsim::log::read::read_log;
 use quadsim::log::{RunOutcome, start_run_log};
@@ -203,4 +204,66 @@ fn passes_stop_where_the_log_samples() {
             assert!(passes < steps / 2, "{passes} passes");
         }
     }
+}
+
+/// quad16 under joint PD on ideal torque sources, dropped onto a ground a
+/// million times stiffer than concrete: at dt = 0.5 ms the contact's
+/// explicit integration is unstable and the run diverges within its first
+/// steps of contact (as in `tests/log_recovery.rs`).
+const DIVERGING: &str = r#"format_version = 1
+[world]
+dt_s = 0.0005
+duration_s = 1.0
+controller_rate_hz = 500
+default_ground = { stiffness_n_per_m = 1.0e11, damping_ns_per_m = 0.0, friction = 0.8 }
+
+[[robots]]
+name = "rex"
+model = "quad16"
+[robots.actuators]
+kind = "ideal"
+[robots.controller]
+kind = "joint_pd"
+bandwidth_hz = 3.0
+gravity_compensation = "static"
+"#;
+
+#[test]
+fn a_divergence_is_reported_at_its_step_after_a_pass_of_several() {
+    let scn = parse_scenario(Path::new("diverging.toml"), DIVERGING.to_string()).unwrap();
+    let check = |w: &World| {
+        quadsim::cli::run::check_finite(w)
+            .err()
+            .map(|e| e.to_string())
+    };
+    // one step at a time, checked after each
+    let mut stepwise = build_world(&scn, Overrides::with_threads(1)).unwrap();
+    let (stepwise_error, stepwise_at) = loop {
+        stepwise.sim.step();
+        if let Some(e) = check(&stepwise) {
+            break (e, stepwise.sim.clock().step);
+        }
+        assert!(stepwise.sim.clock().step < stepwise.steps, "no divergence");
+    };
+    // passes of several steps, checked after each pass
+    let mut fused = build_world(&scn, Overrides::with_threads(1)).unwrap();
+    let (fused_error, fused_at) = loop {
+        fused.sim.run_pass(MAX_PASS_STEPS);
+        if let Some(e) = check(&fused) {
+            break (e, fused.sim.clock().step);
+        }
+    };
+    println!("{stepwise_error} (step {stepwise_at}; the pass ended at step {fused_at})");
+    assert!(
+        stepwise_error.contains("robot 'rex' diverged at t = "),
+        "{stepwise_error}"
+    );
+    assert_eq!(fused_error, stepwise_error);
+    assert!(
+        fused_at > stepwise_at + 1,
+        "the pass went on past the divergence"
+    );
+    // the diverged robot stopped where it diverged: state and metrics as
+    // when the run stops one step at a time
+    assert!(robots(&fused) == robots(&stepwise));
 }

@@ -146,6 +146,11 @@ pub struct RobotRun {
     /// Velocity commands for the walking controller, `(t_s, command)`,
     /// sorted by time; applied at the first controller tick at or after `t_s`.
     pub commands: Vec<(f64, VmcCommand)>,
+    /// The first divergence seen after a step (checked by the step's robot
+    /// pass after every step): the time after that step (s) and what
+    /// diverged. A run stops on it (`quadsim run`), reporting this step
+    /// even when it stops a few steps later, at the end of a pass.
+    pub diverged: Option<(f64, quadsim_engine::divergence::Divergence)>,
 }
 
 impl Default for RobotRun {
@@ -160,6 +165,7 @@ impl Default for RobotRun {
             commanded_distance_m: (0.0, 0.0),
             tau_joints: Vec::new(),
             commands: Vec::new(),
+            diverged: None,
         }
     }
 }

@@ -30,6 +30,7 @@ pub mod control;
 pub mod crba;
 pub mod data;
 pub mod description;
+pub mod divergence;
 pub mod energy;
 pub mod estimation;
 pub mod gait;

@@ -426,13 +426,9 @@ fn start_commands(
     }
 }
 
-/// Largest base or joint speed before a run counts as diverged (m/s for the
-/// base's linear velocity, rad/s for angular and joint velocities).
-pub const DIVERGED_LINEAR_SPEED_MPS: f64 = 100.0;
-/// See [`DIVERGED_LINEAR_SPEED_MPS`] (rad/s).
-pub const DIVERGED_ANGULAR_SPEED_RADPS: f64 = 1000.0;
-/// Deepest contact penetration before a run counts as diverged (m).
-pub const DIVERGED_PENETRATION_M: f64 = 0.2;
+pub use quadsim_engine::divergence::{
+    DIVERGED_ANGULAR_SPEED_RADPS, DIVERGED_LINEAR_SPEED_MPS, DIVERGED_PENETRATION_M,
+};
 
 /// Runs `quadsim run`.
 pub fn run(a: RunArgs) -> Result<(), CliError> {
@@ -529,15 +525,23 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     while done < world.steps {
         let n = chunk.min(world.steps - done);
         let stop = pool.install(|| {
-            for _ in 0..n {
-                if let Some(c) = &mut commands
-                    && let Err(e) = c.before_step(&mut world, monitor.as_ref())
-                {
-                    command_error = Some(e.to_string());
-                    return true;
-                }
-                world.sim.step();
-                done += 1;
+            let mut left = n;
+            while left > 0 {
+                // External commands arrive between steps: one step at a
+                // time then; otherwise passes of several steps where the
+                // log and the monitor allow (the same bits either way).
+                let k = if let Some(c) = &mut commands {
+                    if let Err(e) = c.before_step(&mut world, monitor.as_ref()) {
+                        command_error = Some(e.to_string());
+                        return true;
+                    }
+                    world.sim.step();
+                    1
+                } else {
+                    world.sim.run_pass(left)
+                };
+                left -= k;
+                done += k;
                 if let Err(e) = check_finite(&world) {
                     outcome.diverged = Some(e.to_string());
                     return true;
@@ -693,61 +697,66 @@ pub fn report_error(e: crate::report::ReportError) -> CliError {
     }
 }
 
-/// Stops with an error naming the robot, time and quantity when a state is
-/// not finite, a speed explodes (beyond [`DIVERGED_LINEAR_SPEED_MPS`] or
-/// [`DIVERGED_ANGULAR_SPEED_RADPS`]) or a contact sinks beyond
-/// [`DIVERGED_PENETRATION_M`]. Cheap enough to run after every step.
+/// Stops with an error naming the robot, time and quantity when a robot
+/// has diverged: a state not finite, a speed beyond
+/// [`DIVERGED_LINEAR_SPEED_MPS`] or [`DIVERGED_ANGULAR_SPEED_RADPS`], or a
+/// contact sunk beyond [`DIVERGED_PENETRATION_M`]. The step's robot pass
+/// checks every robot after every step and keeps the first divergence
+/// ([`RobotRun::diverged`](quadsim_components::RobotRun::diverged)), so
+/// the error names the step it happened at, also after a pass of several
+/// steps ([`quadsim_systems::Simulation::run_pass`]).
 pub fn check_finite(world: &World) -> Result<(), CliError> {
-    let t = world.sim.clock().time_s;
+    use quadsim_engine::divergence::Divergence;
     for (name, root) in &world.robots {
         let Some(r) = world.sim.robot(*root) else {
+            continue;
+        };
+        let Some((t, d)) = r.run.diverged else {
             continue;
         };
         let m = &r.model;
         let (nq0, nv0) = (m.base_nq(), m.base_nv());
         let joint = |vi: usize| m.joint_name[m.v_body[vi]].as_str();
-        let what = if let Some(i) = r.state.q.iter().position(|x| !x.is_finite()) {
-            Some(if i < nq0 {
+        let what = match d {
+            Divergence::Position { index: i } if i < nq0 => {
                 format!("q[{i}] (base pose) is not finite")
-            } else {
+            }
+            Divergence::Position { index: i } => {
                 format!("joint '{}' angle is not finite", joint(i - nq0 + nv0))
-            })
-        } else if let Some(i) = r.state.v.iter().position(|x| !x.is_finite()) {
-            Some(format!("v[{i}] ({}) is not finite", velocity_name(m, i)))
-        } else {
-            r.state.v.iter().enumerate().find_map(|(i, &x)| {
-                let linear = m.is_floating() && i < 3;
-                let lim = if linear {
-                    DIVERGED_LINEAR_SPEED_MPS
+            }
+            Divergence::Velocity { index: i } => {
+                format!("v[{i}] ({}) is not finite", velocity_name(m, i))
+            }
+            Divergence::Speed {
+                index: i,
+                value: x,
+                limit: lim,
+            } => {
+                let unit = if m.is_floating() && i < 3 {
+                    "m/s"
                 } else {
-                    DIVERGED_ANGULAR_SPEED_RADPS
+                    "rad/s"
                 };
-                (x.abs() > lim).then(|| {
-                    let unit = if linear { "m/s" } else { "rad/s" };
-                    format!(
-                        "v[{i}] ({}) = {x:.4e} {unit} exceeds {lim} {unit}",
-                        velocity_name(m, i)
-                    )
-                })
-            })
-        }
-        .or_else(|| {
-            r.contact.states.iter().enumerate().find_map(|(i, s)| {
-                (s.penetration_m > DIVERGED_PENETRATION_M).then(|| {
-                    let body = r.contact.points[i].body;
-                    let link = m.frames.iter().find(|f| f.body == body).map_or("?", |f| f.name.as_str());
-                    format!(
-                        "contact point {i} (on link '{link}') penetrates {:.4} m, beyond {DIVERGED_PENETRATION_M} m",
-                        s.penetration_m
-                    )
-                })
-            })
-        });
-        if let Some(what) = what {
-            return Err(CliError::Diverged(format!(
-                "robot '{name}' diverged at t = {t:.4} s: {what} (try a smaller world.dt_s or the rk4 integrator)"
-            )));
-        }
+                format!(
+                    "v[{i}] ({}) = {x:.4e} {unit} exceeds {lim} {unit}",
+                    velocity_name(m, i)
+                )
+            }
+            Divergence::Penetration { point: i, depth_m } => {
+                let body = r.contact.points[i].body;
+                let link = m
+                    .frames
+                    .iter()
+                    .find(|f| f.body == body)
+                    .map_or("?", |f| f.name.as_str());
+                format!(
+                    "contact point {i} (on link '{link}') penetrates {depth_m:.4} m, beyond {DIVERGED_PENETRATION_M} m"
+                )
+            }
+        };
+        return Err(CliError::Diverged(format!(
+            "robot '{name}' diverged at t = {t:.4} s: {what} (try a smaller world.dt_s or the rk4 integrator)"
+        )));
     }
     Ok(())
 }

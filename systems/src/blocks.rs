@@ -19,9 +19,9 @@ use quadsim_components::{
 
 use crate::contact::observe_robot;
 use crate::control::{clock_dt, control_stage, is_control_tick};
-use crate::metrics::record_robot;
+use crate::metrics::{check_divergence, record_robot};
 use crate::sense::sense_robot;
-use crate::step::{count_step, for_each_lane_group, lanes_on, plan_groups, step_group};
+use crate::step::{count_step, for_each_lane_group, lanes_on, live, plan_groups, step_group};
 
 /// How many consecutive steps one run of the step schedule takes every robot
 /// through (at least 1; absent means 1). [`Simulation::run`](crate::Simulation::run)
@@ -68,7 +68,7 @@ impl PassSteps {
 ///   `Control` ([`control_stage`]), `Contact` ([`observe_robot`]),
 ///   `Integrate` (each lane group stepped, as in
 ///   [`step_robots`](crate::step_robots)) and the `Publish` stage's metrics
-///   ([`record_robot`]).
+///   ([`record_robot`]) and divergence check ([`check_divergence`]).
 /// - [`StageLayout::StageMajor`]: each stage walks the whole herd before
 ///   the next starts, one parallel pass per stage: what the standalone
 ///   stage systems [`sense_robots`](crate::sense_robots),
@@ -114,18 +114,20 @@ pub fn step_robot_pass(
             pool.for_each_group(sims, &blocks, |block| {
                 for j in 0..steps {
                     let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
-                    for sim in block.iter_mut() {
+                    for sim in block.iter_mut().filter(|s| live(s)) {
                         sense_robot(sim, t_s);
                     }
-                    for sim in block.iter_mut() {
+                    for sim in block.iter_mut().filter(|s| live(s)) {
                         control_stage(sim, t_s, tick, control_dt_s);
                     }
-                    for sim in block.iter_mut() {
+                    for sim in block.iter_mut().filter(|s| live(s)) {
                         observe_robot(sim, t_s);
                     }
                     for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
-                    for sim in block.iter_mut() {
+                    let (t_after_s, _) = step_time(step0, t0_s, j + 1, dt_s, &rate);
+                    for sim in block.iter_mut().filter(|s| live(s)) {
                         record_robot(sim, dt_s, saturate);
+                        check_divergence(sim, t_after_s);
                     }
                 }
             });
@@ -133,11 +135,29 @@ pub fn step_robot_pass(
         StageLayout::StageMajor => {
             for j in 0..steps {
                 let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
-                pool.for_each(sims, |sim| sense_robot(sim, t_s));
-                pool.for_each(sims, |sim| control_stage(sim, t_s, tick, control_dt_s));
-                pool.for_each(sims, |sim| observe_robot(sim, t_s));
+                pool.for_each(sims, |sim| {
+                    if live(sim) {
+                        sense_robot(sim, t_s)
+                    }
+                });
+                pool.for_each(sims, |sim| {
+                    if live(sim) {
+                        control_stage(sim, t_s, tick, control_dt_s)
+                    }
+                });
+                pool.for_each(sims, |sim| {
+                    if live(sim) {
+                        observe_robot(sim, t_s)
+                    }
+                });
                 pool.for_each_group(sims, &groups, |group| step_group(group, dt_s, integrator));
-                pool.for_each(sims, |sim| record_robot(sim, dt_s, saturate));
+                let (t_after_s, _) = step_time(step0, t0_s, j + 1, dt_s, &rate);
+                pool.for_each(sims, |sim| {
+                    if live(sim) {
+                        record_robot(sim, dt_s, saturate);
+                        check_divergence(sim, t_after_s);
+                    }
+                });
             }
         }
     }

@@ -39,7 +39,7 @@ pub use log::{
     ViewRecord, finish_logging, finish_sampling, frame_parents, log_due, log_step, log_steps,
     logs_due, start_logging, start_sampling, start_sampling_each, step_time_ns, with_fresh_views,
 };
-pub use metrics::{record_metrics, record_robot};
+pub use metrics::{check_divergence, record_metrics, record_robot};
 pub use payload::apply_payload_events;
 pub use publish::{pose_sync_due, sync_link_poses};
 pub use schedule::{

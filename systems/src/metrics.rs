@@ -4,6 +4,7 @@
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{RobotBatch, RobotSim, SimConfig, SimThreadPool};
+use quadsim_engine::divergence;
 use quadsim_engine::metrics::StepSample;
 
 /// Records one step of metrics for every robot: as a system of its own (the
@@ -81,5 +82,21 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
     if let quadsim_components::Controller::Walker(w) = &run.controller {
         run.commanded_distance_m.0 += w.active_command().forward_mps * dt_s;
         run.commanded_distance_m.1 += dt_s;
+    }
+}
+
+/// Records the robot's first divergence ([`RobotRun::diverged`](quadsim_components::RobotRun::diverged)),
+/// if it has none yet: its state after the step at `t_s`, then its contacts'
+/// penetration (as of the step's `Contact` stage).
+pub fn check_divergence(sim: &mut RobotSim, t_s: f64) {
+    if sim.run.diverged.is_some() {
+        return;
+    }
+    let found =
+        divergence::state_divergence(&sim.model, &sim.state.q, &sim.state.v).or_else(|| {
+            divergence::penetration_divergence(sim.contact.states.iter().map(|s| s.penetration_m))
+        });
+    if let Some(d) = found {
+        sim.run.diverged = Some((t_s, d));
     }
 }

@@ -143,7 +143,8 @@ impl Simulation {
     /// calling [`Simulation::step`] `steps` times.
     ///
     /// Where nothing outside the robots looks at the world between steps
-    /// ([`Simulation::quiet_steps`]), one run of the step schedule takes the
+    /// (no log or monitor sample, pose copy or payload event due, no system
+    /// added to the schedule), one run of the step schedule takes the
     /// robots through up to [`MAX_PASS_STEPS`] steps ([`PassSteps`]): each
     /// block of robots stays in the core's cache for all of them, and the
     /// schedules' fixed cost is paid once.
@@ -152,23 +153,34 @@ impl Simulation {
         pool.install(|| {
             let mut left = steps;
             while left > 0 {
-                let n = if self.compile_gate.due(&self.world) {
-                    self.compile.run(&mut self.world);
-                    1
-                } else {
-                    self.quiet_steps(left.min(MAX_PASS_STEPS))
-                };
-                if n > 1 {
-                    self.world.insert_resource(PassSteps::new(n));
-                    self.step.run(&mut self.world);
-                    self.world.insert_resource(PassSteps::ONE);
-                } else {
-                    self.step.run(&mut self.world);
-                }
-                self.passes += 1;
-                left -= n;
+                left -= self.run_pass(left);
             }
         });
+    }
+
+    /// One run of the step schedule, after compiling edited robots as
+    /// [`Simulation::step`] does: up to `max` steps (at least one, at most
+    /// [`MAX_PASS_STEPS`]) as far as nothing outside the robots looks at the
+    /// world in between; returns how many. The
+    /// same bits as that many calls of [`Simulation::step`]. Call it inside
+    /// the world's thread pool (as [`Simulation::run`] does) to spare the
+    /// pool's entry per call.
+    pub fn run_pass(&mut self, max: u64) -> u64 {
+        let n = if self.compile_gate.due(&self.world) {
+            self.compile.run(&mut self.world);
+            1
+        } else {
+            self.quiet_steps(max.clamp(1, MAX_PASS_STEPS))
+        };
+        if n > 1 {
+            self.world.insert_resource(PassSteps::new(n));
+            self.step.run(&mut self.world);
+            self.world.insert_resource(PassSteps::ONE);
+        } else {
+            self.step.run(&mut self.world);
+        }
+        self.passes += 1;
+        n
     }
 
     /// How many of the next steps (1 to `max`) can run in one pass: the

@@ -48,21 +48,32 @@ pub(crate) fn lanes_on(config: &SimConfig, batching: Option<&LaneBatching>) -> L
     }
 }
 
-/// Steps one group of [`plan_groups`]: in lanes when it has several robots.
+/// Steps one group of [`plan_groups`]: in lanes when it has several robots
+/// (robot by robot, the same bits, once one of them has diverged); a robot
+/// that has diverged is not stepped.
 pub(crate) fn step_group(group: &mut [RobotSim], dt_s: f64, integrator: Integrator) {
-    if group.len() > 1 {
+    if group.len() > 1 && group.iter().all(live) {
         step_in_lanes(group, dt_s);
     } else {
-        for sim in group {
+        for sim in group.iter_mut().filter(|s| live(s)) {
             step_robot(sim, dt_s, integrator);
         }
     }
 }
 
+/// Whether a robot is still stepped: one that has diverged
+/// ([`RobotRun::diverged`](quadsim_components::RobotRun::diverged)) stays
+/// as it was then, so that its state, metrics and log end at the step it
+/// diverged at, and no stage meets the exploding or non-finite numbers
+/// that would follow.
+pub(crate) fn live(sim: &RobotSim) -> bool {
+    sim.run.diverged.is_none()
+}
+
 /// Whether a robot can be stepped in SIMD lanes (with semi-implicit Euler):
 /// hybrid dynamics (an imposed joint motion) has no batched form.
 fn lane_ready(sim: &RobotSim) -> bool {
-    sim.workspace.imposed.is_none()
+    sim.workspace.imposed.is_none() && live(sim)
 }
 
 /// Splits `sims` into groups (written as exclusive `ends`): runs of up to
