@@ -50,13 +50,25 @@ pub enum Divergence {
 /// this order: a position not finite, a velocity not finite, a speed beyond
 /// its limit (each by lowest index).
 pub fn state_divergence(model: &Model, q: &[f64], v: &[f64]) -> Option<Divergence> {
+    let linear = if model.is_floating() {
+        3.min(v.len())
+    } else {
+        0
+    };
+    // The usual answer first, without branches: this runs after every
+    // step for every robot.
+    if all_within(q, f64::MAX)
+        && all_within(&v[..linear], DIVERGED_LINEAR_SPEED_MPS)
+        && all_within(&v[linear..], DIVERGED_ANGULAR_SPEED_RADPS)
+    {
+        return None;
+    }
     if let Some(index) = q.iter().position(|x| !x.is_finite()) {
         return Some(Divergence::Position { index });
     }
     if let Some(index) = v.iter().position(|x| !x.is_finite()) {
         return Some(Divergence::Velocity { index });
     }
-    let linear = if model.is_floating() { 3 } else { 0 };
     v.iter().enumerate().find_map(|(index, &value)| {
         let limit = if index < linear {
             DIVERGED_LINEAR_SPEED_MPS
@@ -69,6 +81,12 @@ pub fn state_divergence(model: &Model, q: &[f64], v: &[f64]) -> Option<Divergenc
             limit,
         })
     })
+}
+
+/// Whether every `|x|` is at most `limit` (so finite: a NaN fails the
+/// comparison), without a branch per number.
+fn all_within(xs: &[f64], limit: f64) -> bool {
+    xs.iter().fold(true, |all, x| all & (x.abs() <= limit))
 }
 
 /// The first contact point (by index) among `penetrations_m` deeper than
