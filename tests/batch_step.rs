@@ -104,6 +104,16 @@ fn fingerprint(w: &World) -> Vec<(String, Vec<u64>)> {
         .collect()
 }
 
+/// The sizes of the groups whose exclusive ends `plan_groups` wrote.
+fn group_sizes(ends: &[usize]) -> Vec<usize> {
+    std::iter::once(0)
+        .chain(ends.iter().copied())
+        .collect::<Vec<_>>()
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .collect()
+}
+
 #[test]
 fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
     let mut lanes = world(2, LaneBatching::AcrossRobots);
@@ -112,12 +122,7 @@ fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
     let mut ends = Vec::new();
     let batch = lanes.sim.world.resource::<RobotBatch>();
     quadsim_systems::plan_groups(&batch.sims, LaneBatching::AcrossRobots, &mut ends);
-    let sizes: Vec<usize> = std::iter::once(0)
-        .chain(ends.iter().copied())
-        .collect::<Vec<_>>()
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .collect();
+    let sizes = group_sizes(&ends);
     assert_eq!(sizes, [4, 1, 4, 1, 4, 1], "groups by model");
     // By default a robot whose legs run in lanes on this CPU steps alone.
     let mut auto = world(2, LaneBatching::Auto);
@@ -131,12 +136,7 @@ fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
         expected.extend(if legs { alone } else { vec![size] });
         start += size;
     }
-    let auto_sizes: Vec<usize> = std::iter::once(0)
-        .chain(ends.iter().copied())
-        .collect::<Vec<_>>()
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .collect();
+    let auto_sizes = group_sizes(&ends);
     println!("groups with LaneBatching::Auto: {auto_sizes:?}");
     assert_eq!(auto_sizes, expected, "groups by model, legs in lanes alone");
     let steps = 600;
