@@ -79,7 +79,11 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     let n = obs.feet.len();
     let feet = contact.points[..n].iter().zip(&contact.states[..n]);
     for (foot, (p, s)) in obs.feet.iter_mut().zip(feet) {
-        let centre = data.body_point_world(p.body, p.point_in_body);
+        // The update above queried the terrain at this very centre.
+        let centre = s.last_query.as_ref().map_or_else(
+            || data.body_point_world(p.body, p.point_in_body),
+            |q| q.centre_m,
+        );
         *foot = FootSample {
             in_contact: s.in_contact,
             position_m: if s.in_contact {
