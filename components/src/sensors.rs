@@ -55,6 +55,12 @@ pub struct RobotSensing {
     /// state before the `Contact` stage (a controller ticking on `data`)
     /// and by the `Contact` stage itself.
     pub data_at_state: bool,
+    /// Whether the `Sense` stage has already updated the robot's contact
+    /// states ([`update_after_step`](quadsim_engine::contact::update_after_step))
+    /// at its current `(q, v)` this step, so that the `Contact` stage must
+    /// not update them again. Set by the `Sense` stage, cleared by the
+    /// `Contact` stage.
+    pub contacts_at_state: bool,
 }
 
 impl RobotSensing {
@@ -77,6 +83,7 @@ impl RobotSensing {
             errors: EstimationErrors::default(),
             updates: SensorUpdates::default(),
             data_at_state: false,
+            contacts_at_state: false,
             foot_force_n: vec![0.0; n_feet],
         }
     }

@@ -7,7 +7,7 @@
 //! - `eval`: one [`contact_forces`] call that queries the terrain (4 queries
 //!   + laws + `f_ext`), as at RK4 stages 2–4;
 //! - `step_euler`: what one semi-implicit Euler step costs: [`contact_forces`]
-//!   at the step's start state (answered from the query [`update_after_step`]
+//!   at the step's start state (answered from the force [`update_after_step`]
 //!   kept there) and [`update_after_step`] at the new state (4 queries);
 //! - `step_rk4`: the same with three more querying evaluations.
 //!
@@ -123,7 +123,7 @@ fn contact(c: &mut Criterion) {
                     };
                     for _ in 0..evals {
                         // the integrator evaluates at stage states; here all at
-                        // `now`, the first from the cache, the rest queried
+                        // `now`, the first from the kept force, the rest queried
                         contact_forces(black_box(&points), &model, now, &terrain, &states, None);
                         if evals > 1 {
                             for s in states.iter_mut() {

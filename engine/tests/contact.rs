@@ -380,6 +380,101 @@ fn box_on_incline_sticks_and_slides() {
     }
 }
 
+/// The force [`contact::update_after_step`] keeps for the next evaluation
+/// at the same kinematics is, bit for bit, what a fresh evaluation finds
+/// there against the moved anchors: a tilted box dropped with a sideways
+/// velocity onto an incline goes through lift-off, touchdown, sticking and
+/// slipping, and at every step `contact_forces` from the kept force and from
+/// the states without their caches (querying the terrain, evaluating the
+/// laws) add the same `f_ext`. Away from those kinematics the kept force is
+/// not used.
+#[test]
+fn kept_force_is_the_fresh_evaluation() {
+    let mass = 10.0;
+    let size = DVec3::new(0.4, 0.3, 0.05);
+    let inertia = Shape::Box { size_m: size }.solid_inertia(mass).unwrap();
+    let h = 0.5 * size;
+    let corners: Vec<ContactPoint> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .map(|&(sx, sy)| {
+            ContactPoint::new(
+                0,
+                DVec3::new(sx * h.x, sy * h.y, -h.z),
+                0.01,
+                ContactKind::Foot,
+            )
+        })
+        .collect();
+    let mat = GroundPreset::Grass.material();
+    let incline = Incline::new(0.2, DVec2::INFINITY).unwrap();
+    let terrain =
+        TerrainUnion::new().with(TerrainPatch::at_origin(TerrainShape::Incline(incline), mat));
+    let mut sim = Sim::new(mass, inertia, corners, terrain);
+    sim.model.gravity = DVec3::new(0.0, 0.0, -G);
+    sim.set_pose(DVec3::new(0.0, 0.0, 0.08), DQuat::from_rotation_x(0.3));
+    sim.state.v[1] = 0.8;
+    sim.init_contacts();
+    let fresh = |sim: &Sim, states: &[ContactState]| {
+        let mut d = sim.data.clone();
+        d.clear_external_forces();
+        contact::contact_forces(&sim.points, &sim.model, &mut d, &sim.terrain, states, None);
+        d.f_ext[0]
+    };
+    let bits =
+        |f: quadsim_engine::spatial::Force| [f.lin, f.ang].map(|v| v.to_array().map(f64::to_bits));
+    let (mut touched, mut slipped, mut kept) = (0, 0, 0);
+    for _ in 0..4000 {
+        forward_kinematics(&sim.model, &mut sim.data, &sim.state.q, &sim.state.v);
+        contact::update_after_step(&sim.points, &sim.data, &sim.terrain, &mut sim.states);
+        let cold: Vec<ContactState> = sim
+            .states
+            .iter()
+            .map(|s| ContactState {
+                last_query: None,
+                last_force: None,
+                ..*s
+            })
+            .collect();
+        let with_kept = fresh(&sim, &sim.states);
+        assert_eq!(bits(with_kept), bits(fresh(&sim, &cold)));
+        touched += sim.states.iter().filter(|s| s.in_contact).count();
+        slipped += sim.states.iter().filter(|s| s.slipping).count();
+        kept += sim.states.iter().filter(|s| s.last_force.is_some()).count();
+        let mut forces = ContactForces {
+            terrain: &sim.terrain,
+            points: &sim.points,
+            states: &sim.states,
+        };
+        step(
+            &sim.model,
+            &mut sim.data,
+            &mut sim.ws,
+            &mut sim.state,
+            &sim.zeros,
+            2e-4,
+            Integrator::SemiImplicitEuler,
+            &mut forces,
+        );
+    }
+    assert!(
+        touched > 0 && slipped > 0 && kept == 4 * 4000,
+        "{touched} {slipped} {kept}"
+    );
+    // at other kinematics the kept force is not used
+    let states = sim.states.clone();
+    sim.state.v[0] += 1.0;
+    forward_kinematics(&sim.model, &mut sim.data, &sim.state.q, &sim.state.v);
+    let cold: Vec<ContactState> = states
+        .iter()
+        .map(|s| ContactState {
+            last_query: None,
+            last_force: None,
+            ..*s
+        })
+        .collect();
+    assert_eq!(bits(fresh(&sim, &states)), bits(fresh(&sim, &cold)));
+}
+
 /// Feet of a description: the foot link's collision sphere gives the contact
 /// sphere, in the body the foot is merged into.
 #[test]

@@ -33,7 +33,9 @@ pub fn height_above_ground(terrain: &TerrainUnion, p: DVec3) -> f64 {
 
 /// One robot: kinematics at `(q, v)` (unless the `Sense` stage left them
 /// in `data`, [`RobotSensing::data_at_state`](quadsim_components::RobotSensing::data_at_state)),
-/// contact update, observation, fall check.
+/// contact update (unless the `Sense` stage did it,
+/// [`RobotSensing::contacts_at_state`](quadsim_components::RobotSensing::contacts_at_state)),
+/// observation, fall check.
 pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     let RobotSim {
         model,
@@ -44,14 +46,20 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
         sensing,
         ..
     } = sim;
-    // The `Sense` stage may have computed them this step, at this state.
-    let fresh = sensing
-        .as_deref_mut()
-        .is_some_and(|s| std::mem::take(&mut s.data_at_state));
+    // The `Sense` stage may have computed them this step, at this state,
+    // and updated the contacts there.
+    let (fresh, updated) = sensing.as_deref_mut().map_or((false, false), |s| {
+        (
+            std::mem::take(&mut s.data_at_state),
+            std::mem::take(&mut s.contacts_at_state),
+        )
+    });
     if !fresh {
         forward_kinematics(model, data, &state.q, &state.v);
     }
-    update_after_step(&contact.points, data, &contact.terrain, &mut contact.states);
+    if !updated {
+        update_after_step(&contact.points, data, &contact.terrain, &mut contact.states);
+    }
     contact.time_s = t_s;
     let obs = &mut run.observation;
     obs.t_s = t_s;
@@ -71,7 +79,11 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     let n = obs.feet.len();
     let feet = contact.points[..n].iter().zip(&contact.states[..n]);
     for (foot, (p, s)) in obs.feet.iter_mut().zip(feet) {
-        let centre = data.body_point_world(p.body, p.point_in_body);
+        // The update above queried the terrain at this very centre.
+        let centre = s.last_query.as_ref().map_or_else(
+            || data.body_point_world(p.body, p.point_in_body),
+            |q| q.centre_m,
+        );
         *foot = FootSample {
             in_contact: s.in_contact,
             position_m: if s.in_contact {

@@ -8,7 +8,7 @@
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use quadsim_components::{RobotBatch, RobotSim, SimClock, SimThreadPool};
-use quadsim_engine::contact::evaluate;
+use quadsim_engine::contact::update_after_step;
 use quadsim_engine::estimation::EstimatorInput;
 use quadsim_engine::kinematics::{base_quat, forward_kinematics};
 use quadsim_engine::sensors::{SensorTruth, SensorUpdates};
@@ -38,6 +38,7 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         return;
     };
     s.data_at_state = false;
+    s.contacts_at_state = false;
     // Between samples: when every part of the sensed state is sampled (joint
     // encoders, contact sensors, and the base from the estimator, which runs
     // on IMU samples), none of it changes until a sensor is due, so the
@@ -56,16 +57,18 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
     let n_feet = run.n_feet.min(contact.points.len());
     s.foot_force_n.resize(n_feet, 0.0);
     s.contacts.resize(n_feet, false);
-    // True normal forces at this instant: a pure evaluation (the `Contact`
-    // stage moves the anchors later in the step).
-    for i in 0..n_feet {
-        s.foot_force_n[i] = evaluate(
-            &contact.points[i],
-            data,
-            &contact.terrain,
-            &contact.states[i],
-        )
-        .normal_force_n;
+    // True normal forces at this instant. The `Contact` stage's update of
+    // the contact states, due later in this step at this same state and
+    // with these same states, is done here instead: its evaluation is the
+    // one the forces are read from (a normal force does not depend on the
+    // anchor; the state of a contact off the ground holds 0 N, as its
+    // evaluation does), and the `Contact` stage skips it. Nothing between
+    // the two stages reads what the update changes (the controller's
+    // contact flags and normals do not depend on the anchors either).
+    update_after_step(&contact.points, data, &contact.terrain, &mut contact.states);
+    s.contacts_at_state = true;
+    for (f, c) in s.foot_force_n.iter_mut().zip(&contact.states[..n_feet]) {
+        *f = c.normal_force_n;
     }
     let (nq0, nv0) = (model.base_nq(), model.base_nv());
     // the actuated joints only: a compliant load's coordinates are not sensed

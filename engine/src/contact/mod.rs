@@ -22,7 +22,8 @@
 //! - [`update_after_step`] runs once per accepted step, after kinematics at the
 //!   new state: it records contact, slip, depth and force, sets the anchor at
 //!   touchdown and drags it while slipping. It keeps its terrain query
-//!   ([`CachedQuery`]) for the next step's first evaluation at the same state.
+//!   ([`CachedQuery`]) and the force the moved state gives there
+//!   ([`CachedForce`]) for the next step's first evaluation at the same state.
 //!
 //! The tangential displacement is measured at the contact's ground point (the
 //! surface point nearest the sphere's centre), the slip velocity at the body's
@@ -42,6 +43,7 @@ use crate::data::Data;
 use crate::description::{RobotDescription, Shape};
 use crate::integrate::ForceModel;
 use crate::model::Model;
+use crate::spatial::{Force, Motion};
 use crate::terrain::{TerrainHit, TerrainUnion};
 use glam::DVec3;
 use thiserror::Error;
@@ -184,9 +186,42 @@ pub struct CachedQuery {
     pub hit: Option<TerrainHit>,
 }
 
+/// What [`contact_forces`] adds for one contact at the kinematics
+/// [`update_after_step`] saw, against the state the update left: kept by the
+/// update, whose own evaluation (against the state before it) already holds
+/// most of it, and used by the next [`contact_forces`] call at the same
+/// kinematics — the first derivative evaluation of the step. Valid while the
+/// evaluation's inputs are bitwise those of the update: the sphere centre
+/// (the [`CachedQuery`]'s), the body's spatial velocity, `data.origin`, and
+/// the state's anchor and contact flag (the points and terrain the states
+/// belong to). The force is then the same, bit for bit, so evaluations stay
+/// pure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CachedForce {
+    /// The body's spatial velocity (reference frame), `data.vel[body]`.
+    pub body_velocity: Motion,
+    /// `data.origin` (m).
+    pub origin_m: DVec3,
+    /// The state's anchor then (m, world).
+    pub anchor_m: DVec3,
+    /// The state's contact flag then.
+    pub in_contact: bool,
+    /// What is added to the body's `data.f_ext` (reference frame); `None`:
+    /// no contact, nothing added (whatever the velocity and anchor).
+    pub force: Option<Force>,
+}
+
+/// Whether two vectors hold the same bits (`==` would take −0 for +0).
+#[inline]
+fn same_bits(a: DVec3, b: DVec3) -> bool {
+    (a.x.to_bits() == b.x.to_bits())
+        & (a.y.to_bits() == b.y.to_bits())
+        & (a.z.to_bits() == b.z.to_bits())
+}
+
 /// Persistent state of one contact, updated once per step by [`update_after_step`].
-/// Reset it to the default when the terrain changes (its anchor and cached
-/// query refer to the old ground).
+/// Reset it to the default when the terrain changes (its anchor, cached
+/// query and cached force refer to the old ground).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ContactState {
     /// The sphere overlaps the ground (depth > 0).
@@ -205,6 +240,9 @@ pub struct ContactState {
     pub force_n: DVec3,
     /// The last end-of-step terrain query.
     pub last_query: Option<CachedQuery>,
+    /// The force at the last end-of-step kinematics, against this state
+    /// (valid with `last_query`, at the same centre).
+    pub last_force: Option<CachedForce>,
 }
 
 /// Everything one contact evaluation finds (world frame).
@@ -269,22 +307,37 @@ pub fn evaluate(
     terrain: &TerrainUnion,
     state: &ContactState,
 ) -> ContactEval {
+    evaluate_with_parts(point, data, terrain, state).0
+}
+
+/// [`evaluate`], and for an active contact what its tangential force came
+/// from besides the state: the ground's material and the tangential velocity
+/// of the body's material point (m/s), for [`tangential_force`] against
+/// another anchor.
+#[inline(always)]
+fn evaluate_with_parts<'t>(
+    point: &ContactPoint,
+    data: &Data,
+    terrain: &'t TerrainUnion,
+    state: &ContactState,
+) -> (ContactEval, Option<(&'t GroundMaterial, DVec3)>) {
     let centre = data.body_point_world(point.body, point.point_in_body);
     let hit = match &state.last_query {
         Some(q) if q.centre_m == centre => q.hit,
         _ => terrain.closest_hit(centre),
     };
     let Some(TerrainHit { surface, source }) = hit else {
-        return ContactEval {
+        let e = ContactEval {
             centre_m: centre,
             ..ContactEval::NONE
         };
+        return (e, None);
     };
     let depth_m = surface.depth_m + point.radius_m;
     let n = surface.normal;
     let application_m = centre - point.radius_m * n;
     if depth_m <= 0.0 {
-        return ContactEval {
+        let e = ContactEval {
             depth_m,
             normal: n,
             application_m,
@@ -293,6 +346,7 @@ pub fn evaluate(
             hit,
             ..ContactEval::NONE
         };
+        return (e, None);
     }
     let material = terrain.material(source);
     let v = data.vel[point.body].point_velocity(application_m - data.origin);
@@ -305,21 +359,9 @@ pub fn evaluate(
         depth_rate_mps,
     );
     let v_t = v - vn * n;
-    let e_t = if state.in_contact {
-        let e = surface.point - state.anchor_m;
-        e - e.dot(n) * n
-    } else {
-        DVec3::ZERO
-    };
-    let (tangential_force_n, slipping) = friction::stick_slip(
-        material.tangential_stiffness_npm,
-        material.tangential_damping_nspm,
-        material.friction,
-        normal_force_n,
-        e_t,
-        v_t,
-    );
-    ContactEval {
+    let (tangential_force_n, slipping) =
+        tangential_force(material, state, surface.point, n, normal_force_n, v_t);
+    let e = ContactEval {
         active: true,
         depth_m,
         depth_rate_mps,
@@ -332,7 +374,36 @@ pub fn evaluate(
         tangential_stiffness_npm: material.tangential_stiffness_npm,
         centre_m: centre,
         hit,
-    }
+    };
+    (e, Some((material, v_t)))
+}
+
+/// The stick–slip force of an active contact against `state`'s anchor (N,
+/// world) and whether it slides: the tangential part of `ground_point_m − anchor`
+/// (zero for a contact not yet touching) and the tangential velocity `v_t_mps`.
+#[inline(always)]
+fn tangential_force(
+    material: &GroundMaterial,
+    state: &ContactState,
+    ground_point_m: DVec3,
+    n: DVec3,
+    normal_force_n: f64,
+    v_t_mps: DVec3,
+) -> (DVec3, bool) {
+    let e_t = if state.in_contact {
+        let e = ground_point_m - state.anchor_m;
+        e - e.dot(n) * n
+    } else {
+        DVec3::ZERO
+    };
+    friction::stick_slip(
+        material.tangential_stiffness_npm,
+        material.tangential_damping_nspm,
+        material.friction,
+        normal_force_n,
+        e_t,
+        v_t_mps,
+    )
 }
 
 /// Adds every contact's force to `data.f_ext` at the stage state held in
@@ -350,6 +421,14 @@ pub fn contact_forces(
     debug_assert_eq!(points.len(), states.len());
     debug_assert!(points.iter().all(|p| p.body < model.nbodies));
     for (i, (p, s)) in points.iter().zip(states).enumerate() {
+        if out.is_none()
+            && let Some(f) = cached_force(p, data, s)
+        {
+            if let Some(f) = f {
+                data.f_ext[p.body] += f;
+            }
+            continue;
+        }
         let e = evaluate(p, data, terrain, s);
         if e.active {
             data.add_point_force(p.body, e.application_m, e.force_n());
@@ -358,6 +437,29 @@ pub fn contact_forces(
             o[i] = e;
         }
     }
+}
+
+/// The update's [`CachedForce`] of `state` when `data` holds the inputs it
+/// was found at: `Some(None)` no contact, `Some(Some(f))` add `f`.
+#[inline]
+fn cached_force(point: &ContactPoint, data: &Data, state: &ContactState) -> Option<Option<Force>> {
+    let (Some(q), Some(c)) = (&state.last_query, &state.last_force) else {
+        return None;
+    };
+    let centre = data.body_point_world(point.body, point.point_in_body);
+    if !same_bits(q.centre_m, centre) {
+        return None;
+    }
+    if c.force.is_none() {
+        return Some(None);
+    }
+    let vel = &data.vel[point.body];
+    let same = same_bits(vel.lin, c.body_velocity.lin)
+        & same_bits(vel.ang, c.body_velocity.ang)
+        & same_bits(data.origin, c.origin_m)
+        & same_bits(state.anchor_m, c.anchor_m)
+        & (state.in_contact == c.in_contact);
+    same.then_some(c.force)
 }
 
 /// Once per accepted step, with `data` holding kinematics (with velocities)
@@ -373,18 +475,31 @@ pub fn update_after_step(
 ) {
     debug_assert_eq!(points.len(), states.len());
     for (p, s) in points.iter().zip(states.iter_mut()) {
-        let e = evaluate(p, data, terrain, s);
+        let (e, parts) = evaluate_with_parts(p, data, terrain, s);
         s.last_query = Some(CachedQuery {
             centre_m: e.centre_m,
             hit: e.hit,
         });
-        if !e.active {
+        // `parts` is there exactly when `e.active`.
+        let Some((material, v_t_mps)) = parts else {
+            // At this centre the evaluation is inactive whatever the state.
             *s = ContactState {
                 last_query: s.last_query,
+                last_force: Some(CachedForce {
+                    body_velocity: Motion::ZERO,
+                    origin_m: DVec3::ZERO,
+                    anchor_m: DVec3::ZERO,
+                    in_contact: false,
+                    force: None,
+                }),
                 ..ContactState::default()
             };
             continue;
-        }
+        };
+        // The anchor stays where it is only in a sticking contact that was
+        // already touching: then the state's inputs to `evaluate` are
+        // unchanged and the evaluation against the new state is `e`.
+        let anchor_moves = !s.in_contact || e.slipping;
         if !s.in_contact {
             s.anchor_m = e.ground_point_m;
         }
@@ -401,6 +516,33 @@ pub fn update_after_step(
         s.normal = e.normal;
         s.normal_force_n = e.normal_force_n;
         s.force_n = e.force_n();
+        // What `contact_forces` finds next at this kinematics: `evaluate`
+        // against the new state, in which only the tangential force can
+        // differ (the same centre, query, depth and velocity).
+        let next_force_n = if anchor_moves {
+            let (t, _) = tangential_force(
+                material,
+                s,
+                e.ground_point_m,
+                e.normal,
+                e.normal_force_n,
+                v_t_mps,
+            );
+            ContactEval {
+                tangential_force_n: t,
+                ..e
+            }
+            .force_n()
+        } else {
+            s.force_n
+        };
+        s.last_force = Some(CachedForce {
+            body_velocity: data.vel[p.body],
+            origin_m: data.origin,
+            anchor_m: s.anchor_m,
+            in_contact: s.in_contact,
+            force: Some(Force::at_point(next_force_n, e.application_m - data.origin)),
+        });
     }
 }
 

@@ -175,6 +175,7 @@ impl TerrainHit {
 }
 
 impl Terrain for TerrainUnion {
+    #[inline]
     fn height(&self, x: f64, y: f64) -> Option<f64> {
         let mut top: Option<f64> = None;
         let mut covered = false;
