@@ -227,6 +227,17 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
     k.level = 2;
 }
 
+/// [`forward_kinematics`] without recording `(q, v)` as the state `data`
+/// holds: its cache then says nothing is valid, so a later call computes
+/// again. For a workspace nothing reads afterwards (the estimator's
+/// per-thread spare) the two copies of the state are saved.
+pub fn forward_kinematics_unrecorded(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) {
+    debug_assert_eq!(q.len(), model.nq);
+    debug_assert_eq!(v.len(), model.nv);
+    poses(model, data, q, Some(v));
+    data.kin.level = 0;
+}
+
 /// The base's spatial velocity in the reference frame from `v[0..6]` (zero for a fixed base).
 #[inline]
 pub fn base_velocity(model: &Model, data: &Data, v: &[f64]) -> Motion {

@@ -20,7 +20,7 @@ use glam::{DMat3, DQuat, DVec3};
 
 use crate::contact::ContactPoint;
 use crate::data::Data;
-use crate::kinematics::{base_quat, forward_kinematics};
+use crate::kinematics::{base_quat, forward_kinematics, forward_kinematics_unrecorded};
 use crate::model::Model;
 use crate::sensors::MocapSample;
 use crate::terrain::{Terrain, TerrainUnion};
@@ -213,7 +213,7 @@ impl BaseEstimator {
         self.v_fk[nv0..nv0 + nj_v].copy_from_slice(input.qd_joints_radps);
         // on this thread's kinematics-only spare: nothing reads them later
         Data::with_kinematics_spare(model, |data| {
-            forward_kinematics(model, data, &self.q_fk, &self.v_fk);
+            forward_kinematics_unrecorded(model, data, &self.q_fk, &self.v_fk);
             for (i, foot) in self.feet.iter().enumerate() {
                 let r = data.body_point_world(foot.body, foot.point_in_body);
                 let rd = data.body_point_velocity(foot.body, foot.point_in_body);

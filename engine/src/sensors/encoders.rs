@@ -115,22 +115,31 @@ impl Encoders {
             } if filter_time_constant_s > 0.0 => 1.0 - (-dt / filter_time_constant_s).exp(),
             _ => 1.0,
         };
-        for (j, ch) in self.channels.iter_mut().enumerate() {
-            let theta = ch.sample(q_rad[j], dt, &mut self.rng);
+        // every joint's slots zipped (no bounds check per joint); a short
+        // `q_rad` or `qd_radps` still panics, as indexing did
+        let n_joints = self.channels.len();
+        let (q_rad, qd_radps) = (&q_rad[..n_joints], &qd_radps[..n_joints]);
+        let joints = self
+            .channels
+            .iter_mut()
+            .zip(q_rad.iter().zip(qd_radps))
+            .zip(self.position_rad.iter_mut().zip(&mut self.velocity_radps));
+        for ((ch, (&q, &qd)), (pos, vel)) in joints {
+            let theta = ch.sample(q, dt, &mut self.rng);
             let n = gaussian(&mut self.rng);
             let w = match self.params.velocity {
-                JointVelocityMode::Direct { noise_std_radps } => qd_radps[j] + noise_std_radps * n,
+                JointVelocityMode::Direct { noise_std_radps } => qd + noise_std_radps * n,
                 JointVelocityMode::Differencing { .. } => {
                     if self.sampled && dt > 0.0 {
-                        let raw = (theta - self.position_rad[j]) / dt;
-                        self.velocity_radps[j] + alpha * (raw - self.velocity_radps[j])
+                        let raw = (theta - *pos) / dt;
+                        *vel + alpha * (raw - *vel)
                     } else {
                         0.0
                     }
                 }
             };
-            self.position_rad[j] = theta;
-            self.velocity_radps[j] = w;
+            *pos = theta;
+            *vel = w;
         }
         self.sampled = true;
         true
