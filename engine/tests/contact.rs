@@ -301,6 +301,15 @@ fn riser_impact_is_horizontal() {
     assert!(v.z.abs() < 1e-9 && v.y.abs() < 1e-9, "{v}");
 }
 
+/// Contact points of radius `radius_m` at a box's four bottom corners
+/// (`h`: its half size, body frame at its centre).
+fn box_corners(h: DVec3, radius_m: f64, kind: ContactKind) -> Vec<ContactPoint> {
+    [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .map(|&(sx, sy)| ContactPoint::new(0, DVec3::new(sx * h.x, sy * h.y, -h.z), radius_m, kind))
+        .collect()
+}
+
 /// A flat 10 kg box on four corner contact points rests on an incline
 /// `atan μ − 10°` and slides down `atan μ + 10°` with
 /// `a = g (sin θ − μ cos θ)` within 2 % once the touchdown transient is over.
@@ -310,17 +319,7 @@ fn box_on_incline_sticks_and_slides() {
     let size = DVec3::new(0.4, 0.3, 0.05);
     let inertia = Shape::Box { size_m: size }.solid_inertia(mass).unwrap();
     let h = 0.5 * size;
-    let corners: Vec<ContactPoint> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-        .iter()
-        .map(|&(sx, sy)| {
-            ContactPoint::new(
-                0,
-                DVec3::new(sx * h.x, sy * h.y, -h.z),
-                0.0,
-                ContactKind::Torso,
-            )
-        })
-        .collect();
+    let corners = box_corners(h, 0.0, ContactKind::Torso);
     for p in GroundPreset::ALL {
         let mat = p.material();
         let mu = mat.friction;
@@ -394,17 +393,7 @@ fn kept_force_is_the_fresh_evaluation() {
     let size = DVec3::new(0.4, 0.3, 0.05);
     let inertia = Shape::Box { size_m: size }.solid_inertia(mass).unwrap();
     let h = 0.5 * size;
-    let corners: Vec<ContactPoint> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-        .iter()
-        .map(|&(sx, sy)| {
-            ContactPoint::new(
-                0,
-                DVec3::new(sx * h.x, sy * h.y, -h.z),
-                0.01,
-                ContactKind::Foot,
-            )
-        })
-        .collect();
+    let corners = box_corners(h, 0.01, ContactKind::Foot);
     let mat = GroundPreset::Grass.material();
     let incline = Incline::new(0.2, DVec2::INFINITY).unwrap();
     let terrain =
