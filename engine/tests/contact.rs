@@ -301,13 +301,24 @@ fn riser_impact_is_horizontal() {
     assert!(v.z.abs() < 1e-9 && v.y.abs() < 1e-9, "{v}");
 }
 
-/// Contact points of radius `radius_m` at a box's four bottom corners
-/// (`h`: its half size, body frame at its centre).
-fn box_corners(h: DVec3, radius_m: f64, kind: ContactKind) -> Vec<ContactPoint> {
-    [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+/// Mass (kg) of the flat box of the incline tests.
+const BOX_MASS_KG: f64 = 10.0;
+
+/// The flat 0.4 × 0.3 × 0.05 m box of the incline tests: its rotational
+/// inertia about its centre at [`BOX_MASS_KG`], its half size (m), and
+/// contact points of radius `radius_m` at its four bottom corners (body
+/// frame at its centre).
+fn flat_box(radius_m: f64, kind: ContactKind) -> (DMat3, DVec3, Vec<ContactPoint>) {
+    let size = DVec3::new(0.4, 0.3, 0.05);
+    let inertia = Shape::Box { size_m: size }
+        .solid_inertia(BOX_MASS_KG)
+        .unwrap();
+    let h = 0.5 * size;
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
         .iter()
         .map(|&(sx, sy)| ContactPoint::new(0, DVec3::new(sx * h.x, sy * h.y, -h.z), radius_m, kind))
-        .collect()
+        .collect();
+    (inertia, h, corners)
 }
 
 /// A flat 10 kg box on four corner contact points rests on an incline
@@ -315,11 +326,8 @@ fn box_corners(h: DVec3, radius_m: f64, kind: ContactKind) -> Vec<ContactPoint> 
 /// `a = g (sin θ − μ cos θ)` within 2 % once the touchdown transient is over.
 #[test]
 fn box_on_incline_sticks_and_slides() {
-    let mass = 10.0;
-    let size = DVec3::new(0.4, 0.3, 0.05);
-    let inertia = Shape::Box { size_m: size }.solid_inertia(mass).unwrap();
-    let h = 0.5 * size;
-    let corners = box_corners(h, 0.0, ContactKind::Torso);
+    let mass = BOX_MASS_KG;
+    let (inertia, h, corners) = flat_box(0.0, ContactKind::Torso);
     for p in GroundPreset::ALL {
         let mat = p.material();
         let mu = mat.friction;
@@ -387,13 +395,23 @@ fn box_on_incline_sticks_and_slides() {
 /// the states without their caches (querying the terrain, evaluating the
 /// laws) add the same `f_ext`. Away from those kinematics the kept force is
 /// not used.
+/// `states` with neither the kept terrain query nor the kept force: what a
+/// first evaluation sees.
+fn without_caches(states: &[ContactState]) -> Vec<ContactState> {
+    states
+        .iter()
+        .map(|s| ContactState {
+            last_query: None,
+            last_force: None,
+            ..*s
+        })
+        .collect()
+}
+
 #[test]
 fn kept_force_is_the_fresh_evaluation() {
-    let mass = 10.0;
-    let size = DVec3::new(0.4, 0.3, 0.05);
-    let inertia = Shape::Box { size_m: size }.solid_inertia(mass).unwrap();
-    let h = 0.5 * size;
-    let corners = box_corners(h, 0.01, ContactKind::Foot);
+    let mass = BOX_MASS_KG;
+    let (inertia, _, corners) = flat_box(0.01, ContactKind::Foot);
     let mat = GroundPreset::Grass.material();
     let incline = Incline::new(0.2, DVec2::INFINITY).unwrap();
     let terrain =
@@ -415,15 +433,7 @@ fn kept_force_is_the_fresh_evaluation() {
     for _ in 0..4000 {
         forward_kinematics(&sim.model, &mut sim.data, &sim.state.q, &sim.state.v);
         contact::update_after_step(&sim.points, &sim.data, &sim.terrain, &mut sim.states);
-        let cold: Vec<ContactState> = sim
-            .states
-            .iter()
-            .map(|s| ContactState {
-                last_query: None,
-                last_force: None,
-                ..*s
-            })
-            .collect();
+        let cold = without_caches(&sim.states);
         let with_kept = fresh(&sim, &sim.states);
         assert_eq!(bits(with_kept), bits(fresh(&sim, &cold)));
         touched += sim.states.iter().filter(|s| s.in_contact).count();
@@ -453,14 +463,7 @@ fn kept_force_is_the_fresh_evaluation() {
     let states = sim.states.clone();
     sim.state.v[0] += 1.0;
     forward_kinematics(&sim.model, &mut sim.data, &sim.state.q, &sim.state.v);
-    let cold: Vec<ContactState> = states
-        .iter()
-        .map(|s| ContactState {
-            last_query: None,
-            last_force: None,
-            ..*s
-        })
-        .collect();
+    let cold = without_caches(&states);
     assert_eq!(bits(fresh(&sim, &states)), bits(fresh(&sim, &cold)));
 }
 
