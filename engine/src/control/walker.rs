@@ -604,9 +604,32 @@ impl Walker {
         input: &WalkerInput<'_>,
         tau_joints: &mut [f64],
     ) {
+        crate::kinematics::forward_kinematics(model, data, q, v);
+        self.tick_at_kinematics(model, data, q, v, input, tau_joints);
+    }
+
+    /// [`Self::tick`] when `data` already holds the kinematics at `(q, v)`
+    /// ([`crate::kinematics::forward_kinematics`] ran on this `data` with
+    /// these `q` and `v`, and nothing changed it since): a caller that has
+    /// just computed them (the exact-state tick, which evaluates the contacts
+    /// first) skips the cache's check of the 45 state entries. The results
+    /// are those of [`Self::tick`] bit for bit.
+    pub fn tick_at_kinematics(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        input: &WalkerInput<'_>,
+        tau_joints: &mut [f64],
+    ) {
+        debug_assert_eq!(
+            crate::kinematics::kinematics_level(model, data, q, Some(v)),
+            2,
+            "tick_at_kinematics needs data's kinematics at (q, v)"
+        );
         let nl = self.legs.len();
         let nv0 = model.base_nv();
-        crate::kinematics::forward_kinematics(model, data, q, v);
         let base = data.pose[0];
         let rot = base.rot;
         let p_base = base.trans;
@@ -775,8 +798,9 @@ impl Walker {
         }
 
         // 4. inverse dynamics with the base held still
-        let tau_id = crate::rnea::rnea(model, data, q, v, &self.acc);
-        self.tau_id.copy_from_slice(tau_id);
+        //    (the kinematics at (q, v) are in `data` since the tick began)
+        crate::rnea::rnea_from_kinematics(model, data, v, &self.acc, false);
+        self.tau_id.copy_from_slice(&data.tau);
         // 5. virtual wrench (the swing legs' reaction is not added: feeding
         //    the base rows of τ_id to the QP made quad16 fall even in place —
         //    the moment about the support diagonal is not realizable)
