@@ -360,7 +360,10 @@ pub struct Walker {
     /// [`Self::press_lost_foot`] pushes a stance foot back to. Measured, so a
     /// blind controller on a step finds the step's height, not its map's.
     last_contact_z: [f64; MAX_FEET],
-    /// Joint velocity targets of the last tick (rad/s, joints only).
+    /// Joint velocity targets (rad/s, joints only) of the legs the last tick
+    /// drove by PD (swing legs, stance legs without contact under
+    /// [`WalkerParams::stance_needs_contact`]); a standing leg's entries are
+    /// stale (nothing reads them).
     qd_des: Vec<f64>,
     /// Generalized accelerations for the inverse dynamics (base rows zero).
     acc: Vec<f64>,
@@ -765,15 +768,22 @@ impl Walker {
                     leg_q[k] = q[qi[k]];
                 }
             }
-            if leg
-                .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
-                .is_err()
-            {
-                leg_qd.fill(0.0);
-            }
             for k in 0..dof {
                 self.q_des[vi[k] - nv0] = leg_q[k];
-                self.qd_des[vi[k] - nv0] = leg_qd[k];
+            }
+            // Only a leg step 8 drives by PD (a free one) reads its velocity
+            // target, in this tick: a standing leg's (`J⁻¹·0`) is not formed.
+            let touching = input.contacts.get(i).copied().unwrap_or(true);
+            if swing || (self.params.stance_needs_contact && !touching) {
+                if leg
+                    .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
+                    .is_err()
+                {
+                    leg_qd.fill(0.0);
+                }
+                for k in 0..dof {
+                    self.qd_des[vi[k] - nv0] = leg_qd[k];
+                }
             }
             if swing && self.params.swing_feedforward {
                 // q̈ = d/dt J⁻¹ ṗ by a forward difference along the reference
