@@ -372,8 +372,14 @@ pub fn rpy_from_rot(r: DMat3) -> DVec3 {
     let sp = (-r.x_axis.z).clamp(-1.0, 1.0);
     let pitch = sp.asin();
     let roll = r.y_axis.z.atan2(r.z_axis.z);
-    let yaw = r.x_axis.y.atan2(r.x_axis.x);
-    DVec3::new(roll, pitch, yaw)
+    DVec3::new(roll, pitch, yaw_from_rot(r))
+}
+
+/// [`rpy_from_rot`]'s yaw alone (the same bits): a heading needs neither
+/// roll's `atan2` nor pitch's `asin`.
+#[inline]
+pub fn yaw_from_rot(r: DMat3) -> f64 {
+    r.x_axis.y.atan2(r.x_axis.x)
 }
 
 /// Inertia of one rigid body: mass (kg), centre of mass (m) and rotational

@@ -46,7 +46,7 @@ use crate::gait::{Gait, GaitError};
 use crate::legs::ik::IkOptions;
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
-use crate::spatial::{Force, rpy_from_rot};
+use crate::spatial::{Force, yaw_from_rot};
 use crate::terrain::{Terrain, TerrainUnion};
 use glam::{DMat3, DVec2, DVec3};
 
@@ -639,7 +639,7 @@ impl Walker {
         let v_base = data.vel[0].lin;
         let w_base = data.vel[0].ang;
         let (com, com_vel) = com_and_velocity(model, data);
-        let yaw = rpy_from_rot(rot).z;
+        let yaw = yaw_from_rot(rot);
         let heading = DMat3::from_rotation_z(yaw);
 
         // 0. command ramp
