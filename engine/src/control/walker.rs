@@ -814,16 +814,23 @@ impl Walker {
         // 5. virtual wrench (the swing legs' reaction is not added: feeding
         //    the base rows of τ_id to the QP made quad16 fall even in place —
         //    the moment about the support diagonal is not realizable)
-        let mut w = self.vmc.update(&VmcInput {
-            base_position_m: p_base,
-            base_rotation: rot,
-            base_linear_velocity_mps: v_base,
-            base_angular_velocity_radps: w_base,
-            com_m: com,
-            com_velocity_mps: com_vel,
-            height_above_ground_m: p_base.z - ground_z,
-            dt_s: input.dt_s,
-        });
+        // (the heading frame's entries are `yaw.sin_cos()`: the same bits
+        // VMC would compute)
+        let heading_sin_cos = (heading.x_axis.y, heading.x_axis.x);
+        let mut w = self.vmc.update_at_heading(
+            &VmcInput {
+                base_position_m: p_base,
+                base_rotation: rot,
+                base_linear_velocity_mps: v_base,
+                base_angular_velocity_radps: w_base,
+                com_m: com,
+                com_velocity_mps: com_vel,
+                height_above_ground_m: p_base.z - ground_z,
+                dt_s: input.dt_s,
+            },
+            yaw,
+            heading_sin_cos,
+        );
         let r = self.params.max_horizontal_force_ratio;
         if r > 0.0 {
             let h = w.lin.truncate();
