@@ -368,12 +368,25 @@ pub fn rot_from_rpy(rpy: DVec3) -> DMat3 {
 /// Rotation matrix to roll-pitch-yaw (rad), the inverse of [`rot_from_rpy`]
 /// (pitch in [−π/2, π/2]).
 pub fn rpy_from_rot(r: DMat3) -> DVec3 {
+    let (roll, pitch) = roll_pitch_from_rot(r);
+    DVec3::new(roll, pitch, yaw_from_rot(r))
+}
+
+/// [`rpy_from_rot`]'s roll and pitch alone (the same bits).
+#[inline]
+pub fn roll_pitch_from_rot(r: DMat3) -> (f64, f64) {
     // r = Rz(y) Ry(p) Rx(r): r[0][2] (row 2, col 0) = -sin p
     let sp = (-r.x_axis.z).clamp(-1.0, 1.0);
     let pitch = sp.asin();
     let roll = r.y_axis.z.atan2(r.z_axis.z);
-    let yaw = r.x_axis.y.atan2(r.x_axis.x);
-    DVec3::new(roll, pitch, yaw)
+    (roll, pitch)
+}
+
+/// [`rpy_from_rot`]'s yaw alone (the same bits): a heading needs neither
+/// roll's `atan2` nor pitch's `asin`.
+#[inline]
+pub fn yaw_from_rot(r: DMat3) -> f64 {
+    r.x_axis.y.atan2(r.x_axis.x)
 }
 
 /// Inertia of one rigid body: mass (kg), centre of mass (m) and rotational

@@ -199,8 +199,11 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             Data::with_spare(model, |spare| {
                 w.tick(model, spare, q, v, &input, tau_joints)
             });
-        } else {
+        } else if on_estimate {
             w.tick(model, data, q, v, &input, tau_joints);
+        } else {
+            // the contacts' evaluation above left `data` at this very state
+            w.tick_at_kinematics(model, data, q, v, &input, tau_joints);
         }
         return;
     }

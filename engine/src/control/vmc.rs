@@ -28,7 +28,7 @@
 //! - Yaw: integrated from the commanded yaw rate, starting at the measured
 //!   yaw; the error is wrapped to (−π, π]. Roll and pitch targets are 0.
 
-use crate::spatial::{Force, rpy_from_rot};
+use crate::spatial::{Force, roll_pitch_from_rot, yaw_from_rot};
 use glam::{DMat3, DVec3};
 
 /// Stiffness and damping of the six virtual spring–dampers.
@@ -194,11 +194,22 @@ impl Vmc {
     /// ground should apply to the robot: force (N, world) and moment about the
     /// CoM (N·m, world axes), gravity compensation included.
     pub fn update(&mut self, input: &VmcInput) -> Force {
+        let yaw = yaw_from_rot(input.base_rotation);
+        self.update_at_heading(input, yaw, yaw.sin_cos())
+    }
+
+    /// [`Self::update`] given the base's yaw, `yaw_from_rot(input.base_rotation)`,
+    /// and its `yaw.sin_cos()` (the same bits as [`Self::update`]): the
+    /// walker has both already (its heading frame).
+    pub(crate) fn update_at_heading(
+        &mut self,
+        input: &VmcInput,
+        yaw: f64,
+        (sy, cy): (f64, f64),
+    ) -> Force {
         let p = &self.params;
         let g = &p.gains;
-        let rpy = rpy_from_rot(input.base_rotation);
-        let yaw = rpy.z;
-        let (sy, cy) = yaw.sin_cos();
+        let (roll, pitch) = roll_pitch_from_rot(input.base_rotation);
         // heading frame → world: rotation by ψ about z
         let to_world = |v: glam::DVec2| glam::DVec2::new(cy * v.x - sy * v.y, sy * v.x + cy * v.y);
         let to_heading =
@@ -233,8 +244,8 @@ impl Vmc {
         let kr = g.stiffness_nm_per_rad;
         let br = g.damping_nms_per_rad;
         let m_h = glam::DVec2::new(
-            kr.x * (0.0 - rpy.x) + br.x * (0.0 - w_h.x),
-            kr.y * (0.0 - rpy.y) + br.y * (0.0 - w_h.y),
+            kr.x * (0.0 - roll) + br.x * (0.0 - w_h.x),
+            kr.y * (0.0 - pitch) + br.y * (0.0 - w_h.y),
         );
         let m_xy = to_world(m_h);
         let m_z = kr.z * yaw_err + br.z * (cmd.yaw_rate_radps - w.z);

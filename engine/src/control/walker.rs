@@ -46,7 +46,7 @@ use crate::gait::{Gait, GaitError};
 use crate::legs::ik::IkOptions;
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
-use crate::spatial::{Force, rpy_from_rot};
+use crate::spatial::{Force, yaw_from_rot};
 use crate::terrain::{Terrain, TerrainUnion};
 use glam::{DMat3, DVec2, DVec3};
 
@@ -360,7 +360,10 @@ pub struct Walker {
     /// [`Self::press_lost_foot`] pushes a stance foot back to. Measured, so a
     /// blind controller on a step finds the step's height, not its map's.
     last_contact_z: [f64; MAX_FEET],
-    /// Joint velocity targets of the last tick (rad/s, joints only).
+    /// Joint velocity targets (rad/s, joints only) of the legs the last tick
+    /// drove by PD (swing legs, stance legs without contact under
+    /// [`WalkerParams::stance_needs_contact`]); a standing leg's entries are
+    /// stale (nothing reads them).
     qd_des: Vec<f64>,
     /// Generalized accelerations for the inverse dynamics (base rows zero).
     acc: Vec<f64>,
@@ -604,16 +607,39 @@ impl Walker {
         input: &WalkerInput<'_>,
         tau_joints: &mut [f64],
     ) {
+        crate::kinematics::forward_kinematics(model, data, q, v);
+        self.tick_at_kinematics(model, data, q, v, input, tau_joints);
+    }
+
+    /// [`Self::tick`] when `data` already holds the kinematics at `(q, v)`
+    /// ([`crate::kinematics::forward_kinematics`] ran on this `data` with
+    /// these `q` and `v`, and nothing changed it since): a caller that has
+    /// just computed them (the exact-state tick, which evaluates the contacts
+    /// first) skips the cache's check of the 45 state entries. The results
+    /// are those of [`Self::tick`] bit for bit.
+    pub fn tick_at_kinematics(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        input: &WalkerInput<'_>,
+        tau_joints: &mut [f64],
+    ) {
+        debug_assert_eq!(
+            crate::kinematics::kinematics_level(model, data, q, Some(v)),
+            2,
+            "tick_at_kinematics needs data's kinematics at (q, v)"
+        );
         let nl = self.legs.len();
         let nv0 = model.base_nv();
-        crate::kinematics::forward_kinematics(model, data, q, v);
         let base = data.pose[0];
         let rot = base.rot;
         let p_base = base.trans;
         let v_base = data.vel[0].lin;
         let w_base = data.vel[0].ang;
         let (com, com_vel) = com_and_velocity(model, data);
-        let yaw = rpy_from_rot(rot).z;
+        let yaw = yaw_from_rot(rot);
         let heading = DMat3::from_rotation_z(yaw);
 
         // 0. command ramp
@@ -742,15 +768,22 @@ impl Walker {
                     leg_q[k] = q[qi[k]];
                 }
             }
-            if leg
-                .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
-                .is_err()
-            {
-                leg_qd.fill(0.0);
-            }
             for k in 0..dof {
                 self.q_des[vi[k] - nv0] = leg_q[k];
-                self.qd_des[vi[k] - nv0] = leg_qd[k];
+            }
+            // Only a leg step 8 drives by PD (a free one) reads its velocity
+            // target, in this tick: a standing leg's (`J⁻¹·0`) is not formed.
+            let touching = input.contacts.get(i).copied().unwrap_or(true);
+            if swing || (self.params.stance_needs_contact && !touching) {
+                if leg
+                    .joint_velocities_into(leg_q, vel_body, &self.params.ik, leg_qd)
+                    .is_err()
+                {
+                    leg_qd.fill(0.0);
+                }
+                for k in 0..dof {
+                    self.qd_des[vi[k] - nv0] = leg_qd[k];
+                }
             }
             if swing && self.params.swing_feedforward {
                 // q̈ = d/dt J⁻¹ ṗ by a forward difference along the reference
@@ -775,21 +808,29 @@ impl Walker {
         }
 
         // 4. inverse dynamics with the base held still
-        let tau_id = crate::rnea::rnea(model, data, q, v, &self.acc);
-        self.tau_id.copy_from_slice(tau_id);
+        //    (the kinematics at (q, v) are in `data` since the tick began)
+        crate::rnea::rnea_from_kinematics(model, data, v, &self.acc, false);
+        self.tau_id.copy_from_slice(&data.tau);
         // 5. virtual wrench (the swing legs' reaction is not added: feeding
         //    the base rows of τ_id to the QP made quad16 fall even in place —
         //    the moment about the support diagonal is not realizable)
-        let mut w = self.vmc.update(&VmcInput {
-            base_position_m: p_base,
-            base_rotation: rot,
-            base_linear_velocity_mps: v_base,
-            base_angular_velocity_radps: w_base,
-            com_m: com,
-            com_velocity_mps: com_vel,
-            height_above_ground_m: p_base.z - ground_z,
-            dt_s: input.dt_s,
-        });
+        // (the heading frame's entries are `yaw.sin_cos()`: the same bits
+        // VMC would compute)
+        let heading_sin_cos = (heading.x_axis.y, heading.x_axis.x);
+        let mut w = self.vmc.update_at_heading(
+            &VmcInput {
+                base_position_m: p_base,
+                base_rotation: rot,
+                base_linear_velocity_mps: v_base,
+                base_angular_velocity_radps: w_base,
+                com_m: com,
+                com_velocity_mps: com_vel,
+                height_above_ground_m: p_base.z - ground_z,
+                dt_s: input.dt_s,
+            },
+            yaw,
+            heading_sin_cos,
+        );
         let r = self.params.max_horizontal_force_ratio;
         if r > 0.0 {
             let h = w.lin.truncate();
