@@ -48,13 +48,6 @@ pub struct RobotSensing {
     pub updates: SensorUpdates,
     /// Scratch: each foot's true normal force (N).
     pub foot_force_n: Vec<f64>,
-    /// Whether the robot's `data` holds the kinematics of its current
-    /// `(q, v)` as the `Sense` stage computed them this step, so that the
-    /// `Contact` stage need not compute them again. Set by the `Sense` stage
-    /// after its kinematics, cleared by anything that writes `data` or the
-    /// state before the `Contact` stage (a controller ticking on `data`)
-    /// and by the `Contact` stage itself.
-    pub data_at_state: bool,
     /// Whether the `Sense` stage has already updated the robot's contact
     /// states ([`update_after_step`](quadsim_engine::contact::update_after_step))
     /// at its current `(q, v)` this step, so that the `Contact` stage must
@@ -82,7 +75,6 @@ impl RobotSensing {
             contacts: vec![false; n_feet],
             errors: EstimationErrors::default(),
             updates: SensorUpdates::default(),
-            data_at_state: false,
             contacts_at_state: false,
             foot_force_n: vec![0.0; n_feet],
         }

@@ -31,9 +31,7 @@ pub fn height_above_ground(terrain: &TerrainUnion, p: DVec3) -> f64 {
     terrain.height(p.x, p.y).map_or(f64::INFINITY, |h| p.z - h)
 }
 
-/// One robot: kinematics at `(q, v)` (unless the `Sense` stage left them
-/// in `data`, [`RobotSensing::data_at_state`](quadsim_components::RobotSensing::data_at_state)),
-/// contact update (unless the `Sense` stage did it,
+/// One robot: kinematics at `(q, v)`, contact update (unless the `Sense` stage did it,
 /// [`RobotSensing::contacts_at_state`](quadsim_components::RobotSensing::contacts_at_state)),
 /// observation, fall check.
 pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
@@ -46,17 +44,13 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
         sensing,
         ..
     } = sim;
-    // The `Sense` stage may have computed them this step, at this state,
-    // and updated the contacts there.
-    let (fresh, updated) = sensing.as_deref_mut().map_or((false, false), |s| {
-        (
-            std::mem::take(&mut s.data_at_state),
-            std::mem::take(&mut s.contacts_at_state),
-        )
-    });
-    if !fresh {
-        forward_kinematics(model, data, &state.q, &state.v);
-    }
+    // On sensor steps the `Sense` stage computed these kinematics (a hit
+    // of `data`'s kinematics cache, unless a controller used `data` since)
+    // and updated the contacts at this state.
+    let updated = sensing
+        .as_deref_mut()
+        .is_some_and(|s| std::mem::take(&mut s.contacts_at_state));
+    forward_kinematics(model, data, &state.q, &state.v);
     if !updated {
         update_after_step(&contact.points, data, &contact.terrain, &mut contact.states);
     }

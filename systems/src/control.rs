@@ -149,13 +149,6 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
         let n = run.n_feet.min(4);
         let mut contacts = [false; 4];
         let mut normals = [glam::DVec3::Z; 4];
-        // Only a tick on the estimate with the robot's own view leaves the
-        // robot's `data` as the `Sense` stage computed it (see below).
-        if let Some(s) = sensing.as_deref_mut()
-            && (own_view || !s.controls_on_estimate())
-        {
-            s.data_at_state = false;
-        }
         let (q, v) = read_state(sensing, state);
         let (q, v) = (&q[..nq], &v[..nv]);
         let estimating = sensing.as_deref().filter(|s| s.controls_on_estimate());

@@ -37,7 +37,6 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
     let Some(s) = sensing.as_deref_mut() else {
         return;
     };
-    s.data_at_state = false;
     s.contacts_at_state = false;
     // Between samples: when every part of the sensed state is sampled (joint
     // encoders, contact sensors, and the base from the estimator, which runs
@@ -53,7 +52,6 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         return;
     }
     forward_kinematics(model, data, &state.q, &state.v);
-    s.data_at_state = true;
     let n_feet = run.n_feet.min(contact.points.len());
     s.foot_force_n.resize(n_feet, 0.0);
     s.contacts.resize(n_feet, false);
