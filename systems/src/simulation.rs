@@ -132,11 +132,7 @@ impl Simulation {
     /// act on (no edit, removal, configuration or ground change, payload
     /// event due since the last check), the usual case between two steps.
     pub fn step(&mut self) {
-        if self.compile_gate.due(&self.world) {
-            self.compile.run(&mut self.world);
-        }
-        self.step.run(&mut self.world);
-        self.passes += 1;
+        self.run_pass(1);
     }
 
     /// Runs `steps` fixed steps, with the same result, bit for bit, as
@@ -158,8 +154,9 @@ impl Simulation {
         });
     }
 
-    /// One run of the step schedule, after compiling edited robots as
-    /// [`Simulation::step`] does: up to `max` steps (at least one, at most
+    /// One run of the step schedule, after compiling edited robots (the
+    /// [`CompileGate`] as in [`Simulation::step`], which is `run_pass(1)`):
+    /// up to `max` steps (at least one, at most
     /// [`MAX_PASS_STEPS`]) as far as nothing outside the robots looks at the
     /// world in between; returns how many. The
     /// same bits as that many calls of [`Simulation::step`]. Call it inside
@@ -192,7 +189,7 @@ impl Simulation {
     /// else outside the robots changes between steps, so a robot meets the
     /// same calls with the same inputs as step by step.
     fn quiet_steps(&self, max: u64) -> u64 {
-        if self.step_schedule_lent {
+        if max <= 1 || self.step_schedule_lent {
             return 1;
         }
         let w = &self.world;
