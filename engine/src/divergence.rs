@@ -70,17 +70,24 @@ pub fn state_divergence(model: &Model, q: &[f64], v: &[f64]) -> Option<Divergenc
         return Some(Divergence::Velocity { index });
     }
     v.iter().enumerate().find_map(|(index, &value)| {
-        let limit = if index < linear {
-            DIVERGED_LINEAR_SPEED_MPS
-        } else {
-            DIVERGED_ANGULAR_SPEED_RADPS
-        };
+        let (limit, _) = speed_limit(model, index);
         (value.abs() > limit).then_some(Divergence::Speed {
             index,
             value,
             limit,
         })
     })
+}
+
+/// The divergence limit of velocity coordinate `index` of `model` and its
+/// unit: [`DIVERGED_LINEAR_SPEED_MPS`] for a floating base's linear
+/// velocity (`v[0..3]`), [`DIVERGED_ANGULAR_SPEED_RADPS`] for every other.
+pub fn speed_limit(model: &Model, index: usize) -> (f64, &'static str) {
+    if model.is_floating() && index < 3 {
+        (DIVERGED_LINEAR_SPEED_MPS, "m/s")
+    } else {
+        (DIVERGED_ANGULAR_SPEED_RADPS, "rad/s")
+    }
 }
 
 /// Whether every `|x|` is at most `limit` (so finite: a NaN fails the

@@ -530,16 +530,16 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
                 // External commands arrive between steps: one step at a
                 // time then; otherwise passes of several steps where the
                 // log and the monitor allow (the same bits either way).
-                let k = if let Some(c) = &mut commands {
+                let max = if let Some(c) = &mut commands {
                     if let Err(e) = c.before_step(&mut world, monitor.as_ref()) {
                         command_error = Some(e.to_string());
                         return true;
                     }
-                    world.sim.step();
                     1
                 } else {
-                    world.sim.run_pass(left)
+                    left
                 };
+                let k = world.sim.run_pass(max);
                 left -= k;
                 done += k;
                 if let Err(e) = check_finite(&world) {
@@ -732,11 +732,7 @@ pub fn check_finite(world: &World) -> Result<(), CliError> {
                 value: x,
                 limit: lim,
             } => {
-                let unit = if m.is_floating() && i < 3 {
-                    "m/s"
-                } else {
-                    "rad/s"
-                };
+                let (_, unit) = quadsim_engine::divergence::speed_limit(m, i);
                 format!(
                     "v[{i}] ({}) = {x:.4e} {unit} exceeds {lim} {unit}",
                     velocity_name(m, i)
