@@ -77,6 +77,12 @@ impl PassSteps {
 ///   [`step_robots`](crate::step_robots) and
 ///   [`record_metrics`](crate::record_metrics) do, one after the other.
 ///
+/// In both, a robot that has diverged (its first divergence recorded by
+/// [`check_divergence`]) is skipped by every stage; the standalone stage
+/// systems do not skip it, as [`finish_sampling`](crate::finish_sampling)
+/// uses them to bring every robot's contacts and command to its current
+/// state for a last sample.
+///
 /// Both layouts and the clock are this one system, rather than separate
 /// systems behind run conditions, because the schedule's executor costs a
 /// few hundred instructions per step for every system and condition it
