@@ -27,8 +27,14 @@ pub struct ActuatorStats {
     torque_hits: Vec<u64>,
     speed_hits: Vec<u64>,
     envelope_hits: Vec<u64>,
-    /// At the torque limit, the speed limit, the envelope in the last step.
-    was_at: Vec<[bool; 3]>,
+    /// At the torque limit, the speed limit, the envelope in the last step
+    /// (one list each, so that each limit's loop is element-wise).
+    was_at_torque: Vec<bool>,
+    was_at_speed: Vec<bool>,
+    was_at_envelope: Vec<bool>,
+    /// Whether any of `was_at_torque` (`was_at_speed`) is set.
+    any_was_at_torque: bool,
+    any_was_at_speed: bool,
     time_s: f64,
 }
 
@@ -91,7 +97,11 @@ impl ActuatorStats {
             torque_hits: vec![0; n],
             speed_hits: vec![0; n],
             envelope_hits: vec![0; n],
-            was_at: vec![[false; 3]; n],
+            was_at_torque: vec![false; n],
+            was_at_speed: vec![false; n],
+            was_at_envelope: vec![false; n],
+            any_was_at_torque: false,
+            any_was_at_speed: false,
             time_s: 0.0,
         }
     }
@@ -113,9 +123,11 @@ impl ActuatorStats {
             &mut self.at_speed_limit_s[..n],
         );
         let (torque_hits, speed_hits) = (&mut self.torque_hits[..n], &mut self.speed_hits[..n]);
-        let (was_at, tau_cmd) = (&mut self.was_at[..n], &tau_cmd[..n]);
-        // the peaks on their own: an element-wise loop without branches,
-        // which vectorises (the same operations per joint)
+        let tau_cmd = &tau_cmd[..n];
+        // the peaks on their own, and whether any joint is at its torque
+        // limit: an element-wise loop without branches, which vectorises
+        // (the same operations per joint)
+        let mut any_at_torque = false;
         for (((peak_t, peak_d), tau), lim) in peak_torque
             .iter_mut()
             .zip(peak_demand.iter_mut())
@@ -125,22 +137,40 @@ impl ActuatorStats {
             let t = tau.abs();
             *peak_t = peak_t.max(t.min(*lim));
             *peak_d = peak_d.max(t);
+            any_at_torque |= t >= *lim;
         }
-        for j in 0..n {
-            let lim = effort[j];
-            let t = tau_cmd[j].abs();
-            let at_torque = t >= lim;
-            if at_torque {
-                at_torque_s[j] += dt_s;
-                torque_hits[j] += u64::from(!was_at[j][0]);
+        // joints without a speed (a short `qd`) are not at their speed limit
+        let m = n.min(qd.len());
+        let any_at_speed = qd[..m]
+            .iter()
+            .zip(&velocity[..m])
+            .fold(false, |any, (v, lim)| any | (v.abs() >= *lim));
+        // A step with no joint at a limit, after one with none either (the
+        // usual step), changes no time, hit or flag: the loops below run
+        // only when a joint is at a limit now or was in the last step.
+        if any_at_torque || self.any_was_at_torque {
+            let was = &mut self.was_at_torque[..n];
+            for j in 0..n {
+                let at = tau_cmd[j].abs() >= effort[j];
+                if at {
+                    at_torque_s[j] += dt_s;
+                    torque_hits[j] += u64::from(!was[j]);
+                }
+                was[j] = at;
             }
-            let at_speed = qd.get(j).is_some_and(|v| v.abs() >= velocity[j]);
-            if at_speed {
-                at_speed_s[j] += dt_s;
-                speed_hits[j] += u64::from(!was_at[j][1]);
+            self.any_was_at_torque = self.was_at_torque.contains(&true);
+        }
+        if any_at_speed || self.any_was_at_speed {
+            let was = &mut self.was_at_speed[..n];
+            for j in 0..n {
+                let at = j < m && qd[j].abs() >= velocity[j];
+                if at {
+                    at_speed_s[j] += dt_s;
+                    speed_hits[j] += u64::from(!was[j]);
+                }
+                was[j] = at;
             }
-            was_at[j][0] = at_torque;
-            was_at[j][1] = at_speed;
+            self.any_was_at_speed = self.was_at_speed.contains(&true);
         }
     }
 
@@ -150,9 +180,9 @@ impl ActuatorStats {
         for (j, &at) in at_envelope.iter().enumerate().take(self.effort_limit.len()) {
             if at {
                 self.at_envelope_s[j] += dt_s;
-                self.envelope_hits[j] += u64::from(!self.was_at[j][2]);
+                self.envelope_hits[j] += u64::from(!self.was_at_envelope[j]);
             }
-            self.was_at[j][2] = at;
+            self.was_at_envelope[j] = at;
         }
     }
 

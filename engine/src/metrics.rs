@@ -3,7 +3,7 @@
 //! `scenarios/README.md` ("Metrics"); the doc of each [`MetricsSummary`] field
 //! repeats it in short.
 
-use crate::spatial::rpy_from_rot;
+use crate::spatial::yaw_from_rot;
 use crate::support::stability_margin;
 use glam::{DMat3, DVec2, DVec3};
 
@@ -123,9 +123,9 @@ pub struct MetricsAccumulator {
     peak_speed: f64,
     base_h: Stat,
     com_h: Stat,
-    roll: Stat,
-    pitch: Stat,
-    yaw: Stat,
+    roll: RollRange,
+    pitch: PitchRange,
+    yaw: Range,
     yaw_prev: f64,
     yaw_unwrapped: f64,
     err_sq: f64,
@@ -141,8 +141,8 @@ pub struct MetricsAccumulator {
     /// CoM in the heading frame at the window start.
     com_h0: DVec3,
     /// CoM y and z in the heading frame, relative to the window start.
-    com_hy: Stat,
-    com_hz: Stat,
+    com_hy: Range,
+    com_hz: Range,
     /// Upper and lower convex hulls of the points (t − t0, x_heading − x0): the
     /// extremes of x minus any straight line lie on them (see [`Hulls`]).
     x_hulls: Hulls,
@@ -230,6 +230,39 @@ impl Stat {
         self.min = self.min.min(x);
         self.max = self.max.max(x);
     }
+    fn p2p(&self) -> f64 {
+        if self.min.is_finite() {
+            self.max - self.min
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Smallest and largest value, as [`Stat`]'s (an angle's range needs no
+/// time integral).
+#[derive(Clone, Copy, Debug)]
+struct Range {
+    min: f64,
+    max: f64,
+}
+
+impl Range {
+    const EMPTY: Range = Range {
+        min: f64::INFINITY,
+        max: f64::NEG_INFINITY,
+    };
+    /// Adds `x`; returns whether the minimum and the maximum changed (their
+    /// bits).
+    fn add(&mut self, x: f64) -> (bool, bool) {
+        let (min, max) = (self.min.min(x), self.max.max(x));
+        let changed = (
+            min.to_bits() != self.min.to_bits(),
+            max.to_bits() != self.max.to_bits(),
+        );
+        (self.min, self.max) = (min, max);
+        changed
+    }
     fn range(&self) -> [f64; 2] {
         if self.min.is_finite() {
             [self.min, self.max]
@@ -243,6 +276,120 @@ impl Stat {
         } else {
             0.0
         }
+    }
+}
+
+/// Margin by which an argument must lie inside its extremes' arguments for
+/// [`RollRange`] and [`PitchRange`] to skip the library call: the angles then
+/// differ by more than 5·10⁻¹⁰ rad, some 10⁶ times the error of the
+/// library's `atan2` and `asin` (about 1 ulp, < 2.3·10⁻¹⁶ rad below π/2), so
+/// the computed angle lies strictly inside the computed extremes too and
+/// adding it would change neither.
+const INSIDE_MARGIN: f64 = 1e-9;
+
+/// The range of the roll `atan2(y, z)` ([`crate::spatial::rpy_from_rot`]'s:
+/// `y`, `z` the rotation's `y_axis.z` and `z_axis.z`), with
+/// the arguments `(y, z)` of its extremes, so that a step whose roll
+/// provably lies strictly between them skips the `atan2` (two per robot
+/// and step otherwise, with the yaw's).
+///
+/// With `z`, `z_lo` > 0 the angles lie in (−π/2, π/2), their difference
+/// `Δ` in (−π, π), and `z_lo·y − y_lo·z = |v|·|v_lo|·sin Δ` with
+/// `|v|² = y² + z² ≤ 2` (a rotation's row has norm 1): a cross product above
+/// [`INSIDE_MARGIN`] (whose rounding error is ~10⁻¹⁶) gives
+/// `sin Δ > INSIDE_MARGIN / 2`, so `Δ > 5·10⁻¹⁰` rad. Likewise for the
+/// maximum. Any other case (NaN included) takes the `atan2`.
+#[derive(Clone, Copy, Debug)]
+struct RollRange {
+    range: Range,
+    /// `(y, z)` of the minimum and of the maximum (NaN: none usable).
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+impl RollRange {
+    const EMPTY: RollRange = RollRange {
+        range: Range::EMPTY,
+        lo: [f64::NAN; 2],
+        hi: [f64::NAN; 2],
+    };
+
+    fn add(&mut self, r: &DMat3) {
+        let (y, z) = (r.y_axis.z, r.z_axis.z);
+        let [y_lo, z_lo] = self.lo;
+        let [y_hi, z_hi] = self.hi;
+        let inside = z > 0.0
+            && z_lo > 0.0
+            && z_hi > 0.0
+            && y * y + z * z <= 2.0
+            && z_lo * y - y_lo * z > INSIDE_MARGIN
+            && y_hi * z - z_hi * y > INSIDE_MARGIN;
+        if inside {
+            return;
+        }
+        // `rpy_from_rot`'s roll
+        let roll = y.atan2(z);
+        let (new_min, new_max) = self.range.add(roll);
+        // only arguments of norm² ≤ 2 serve as a bound
+        let at = if y * y + z * z <= 2.0 {
+            [y, z]
+        } else {
+            [f64::NAN; 2]
+        };
+        if new_min {
+            self.lo = at;
+        }
+        if new_max {
+            self.hi = at;
+        }
+    }
+}
+
+/// The range of the pitch `asin(s)` ([`crate::spatial::rpy_from_rot`]'s: `s`
+/// the rotation's `−x_axis.z` clamped to [−1, 1]), with the arguments of its
+/// extremes: `asin` increases with slope ≥ 1, so an `s` more than
+/// [`INSIDE_MARGIN`] inside them (the difference rounded by < 2.3·10⁻¹⁶) has
+/// a pitch more than 5·10⁻¹⁰ rad inside, and skips the `asin`.
+#[derive(Clone, Copy, Debug)]
+struct PitchRange {
+    range: Range,
+    /// `s` of the minimum and of the maximum (NaN: none yet).
+    lo: f64,
+    hi: f64,
+}
+
+impl PitchRange {
+    const EMPTY: PitchRange = PitchRange {
+        range: Range::EMPTY,
+        lo: f64::NAN,
+        hi: f64::NAN,
+    };
+
+    fn add(&mut self, r: &DMat3) {
+        let sp = (-r.x_axis.z).clamp(-1.0, 1.0);
+        if sp - self.lo > INSIDE_MARGIN && self.hi - sp > INSIDE_MARGIN {
+            return;
+        }
+        // `rpy_from_rot`'s pitch
+        let (new_min, new_max) = self.range.add(sp.asin());
+        if new_min {
+            self.lo = sp;
+        }
+        if new_max {
+            self.hi = sp;
+        }
+    }
+}
+
+/// `x.round()`, without the library call for |x| < 0.5 (a yaw step of less
+/// than half a turn, every step but a wrap): the rounding of such an `x` is
+/// the zero of its sign, which `0.0.copysign(x)` is, bit for bit.
+#[inline]
+fn round_turns(x: f64) -> f64 {
+    if x.abs() < 0.5 {
+        0.0f64.copysign(x)
+    } else {
+        x.round()
     }
 }
 
@@ -263,9 +410,9 @@ impl MetricsAccumulator {
             peak_speed: f64::NEG_INFINITY,
             base_h: Stat::EMPTY,
             com_h: Stat::EMPTY,
-            roll: Stat::EMPTY,
-            pitch: Stat::EMPTY,
-            yaw: Stat::EMPTY,
+            roll: RollRange::EMPTY,
+            pitch: PitchRange::EMPTY,
+            yaw: Range::EMPTY,
             yaw_prev: 0.0,
             yaw_unwrapped: 0.0,
             err_sq: 0.0,
@@ -279,8 +426,8 @@ impl MetricsAccumulator {
             com_start: DVec3::ZERO,
             com_end: DVec3::ZERO,
             com_h0: DVec3::ZERO,
-            com_hy: Stat::EMPTY,
-            com_hz: Stat::EMPTY,
+            com_hy: Range::EMPTY,
+            com_hz: Range::EMPTY,
             x_hulls: Hulls::new(),
             tau_peak: Vec::new(),
             tau_abs_integral: Vec::new(),
@@ -301,15 +448,16 @@ impl MetricsAccumulator {
         if s.fallen && self.fell_at_s.is_none() {
             self.fell_at_s = Some(s.t_s);
         }
-        let rpy = rpy_from_rot(s.base_rotation);
+        // roll and pitch only count in the window (below)
+        let yaw = yaw_from_rot(s.base_rotation);
         if !self.have_prev {
-            self.yaw_prev = rpy.z;
-            self.yaw_unwrapped = rpy.z;
+            self.yaw_prev = yaw;
+            self.yaw_unwrapped = yaw;
         } else {
-            let mut d = rpy.z - self.yaw_prev;
-            d -= (d / std::f64::consts::TAU).round() * std::f64::consts::TAU;
+            let mut d = yaw - self.yaw_prev;
+            d -= round_turns(d / std::f64::consts::TAU) * std::f64::consts::TAU;
             self.yaw_unwrapped += d;
-            self.yaw_prev = rpy.z;
+            self.yaw_prev = yaw;
         }
         let in_window = s.t_s >= self.window_start_s - 1e-12;
         let mut touchdowns = 0;
@@ -334,8 +482,8 @@ impl MetricsAccumulator {
         self.time_s += s.dt_s;
         self.com_end = s.com_m;
         let ch = self.heading_frame(s.com_m) - self.com_h0;
-        self.com_hy.add(ch.y, s.dt_s);
-        self.com_hz.add(ch.z, s.dt_s);
+        self.com_hy.add(ch.y);
+        self.com_hz.add(ch.z);
         self.x_hulls.push(DVec2::new(s.t_s - self.t0, ch.x));
         if self.tau_peak.len() != s.tau_joints.len() {
             // only when the robot's joint count changes (first step, recompile)
@@ -359,9 +507,9 @@ impl MetricsAccumulator {
         self.peak_speed = self.peak_speed.max(v_fwd);
         self.base_h.add(s.base_height_above_ground_m, s.dt_s);
         self.com_h.add(s.com_height_above_ground_m, s.dt_s);
-        self.roll.add(rpy.x, s.dt_s);
-        self.pitch.add(rpy.y, s.dt_s);
-        self.yaw.add(self.yaw_unwrapped, s.dt_s);
+        self.roll.add(&s.base_rotation);
+        self.pitch.add(&s.base_rotation);
+        self.yaw.add(self.yaw_unwrapped);
         if let Some(qd) = s.q_desired {
             for (d, q) in qd.iter().zip(s.q_joints) {
                 self.err_sq += (d - q) * (d - q);
@@ -413,8 +561,8 @@ impl MetricsAccumulator {
             base_height_p2p_m: self.base_h.p2p(),
             com_height_mean_m: mean(&self.com_h),
             com_height_p2p_m: self.com_h.p2p(),
-            roll_range_rad: self.roll.range(),
-            pitch_range_rad: self.pitch.range(),
+            roll_range_rad: self.roll.range.range(),
+            pitch_range_rad: self.pitch.range.range(),
             yaw_range_rad: self.yaw.range(),
             joint_rms_error_rad: (self.err_n > 0).then(|| (self.err_sq / self.err_n as f64).sqrt()),
             max_foot_force_n: self.max_force,
@@ -640,5 +788,56 @@ mod tests {
         assert_eq!(s.joint_peak_abs_torque_nm[1], 3.0);
         assert!((s.joint_mean_abs_torque_nm[0] - 4.0 / std::f64::consts::PI).abs() < 1e-6);
         assert!((s.joint_mean_abs_torque_nm[1] - 3.0).abs() < 1e-9);
+    }
+    /// The roll and pitch ranges that skip the library calls are those of
+    /// `rpy_from_rot` over every sample, bit for bit: on a wobbling base
+    /// (extremes reached again and again, and samples near them), tilted
+    /// past the vertical too (z ≤ 0: the exact path).
+    #[test]
+    fn roll_and_pitch_ranges_are_rpy_from_rots() {
+        use crate::spatial::{rot_from_rpy, rpy_from_rot};
+        let mut roll = RollRange::EMPTY;
+        let mut pitch = PitchRange::EMPTY;
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for k in 0..20_000 {
+            let t = k as f64 * 0.0005;
+            let amp = if k > 15_000 { 2.0 } else { 0.2 };
+            let rpy = DVec3::new(
+                amp * (7.0 * t).sin() + 1e-10 * (k % 3) as f64,
+                0.15 * (5.0 * t).cos() * (1.0 + 0.1 * (0.3 * t).sin()),
+                0.4 * t,
+            );
+            let r = rot_from_rpy(rpy);
+            roll.add(&r);
+            pitch.add(&r);
+            let e = rpy_from_rot(r);
+            (lo, hi) = (lo.min(e), hi.max(e));
+            assert_eq!(roll.range.range(), [lo.x, hi.x], "roll at {k}");
+            assert_eq!(pitch.range.range(), [lo.y, hi.y], "pitch at {k}");
+        }
+    }
+
+    /// `round_turns` is `round`, bit for bit, on both sides of ±0.5 and at ±0.
+    #[test]
+    fn round_turns_is_round() {
+        for x in [
+            0.0,
+            -0.0,
+            0.25,
+            -0.25,
+            0.49999999999999994,
+            -0.49999999999999994,
+            0.5,
+            -0.5,
+            0.75,
+            -1.5,
+            1e-300,
+            -1e-300,
+            3.2,
+            f64::NAN,
+            f64::INFINITY,
+        ] {
+            assert_eq!(round_turns(x).to_bits(), x.round().to_bits(), "{x}");
+        }
     }
 }

@@ -11,6 +11,16 @@ use glam::DVec2;
 /// Convex hull of up to `N` points (Andrew's monotone chain), counter-clockwise,
 /// written into `hull`; returns the number of hull vertices. No allocation.
 pub fn convex_hull<const N: usize>(points: &[DVec2], hull: &mut [DVec2; N]) -> usize {
+    convex_hull_with(points, hull, &mut [DVec2::ZERO; 64])
+}
+
+/// [`convex_hull`] with the chain's work space given (at least `2 N`
+/// points), so that a small hull fills a small one.
+fn convex_hull_with<const N: usize, const T: usize>(
+    points: &[DVec2],
+    hull: &mut [DVec2; N],
+    tmp: &mut [DVec2; T],
+) -> usize {
     let n = points.len().min(N);
     let mut pts = [DVec2::ZERO; N];
     pts[..n].copy_from_slice(&points[..n]);
@@ -21,8 +31,7 @@ pub fn convex_hull<const N: usize>(points: &[DVec2], hull: &mut [DVec2; N]) -> u
         return n;
     }
     let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
-    let mut tmp = [DVec2::ZERO; 64];
-    assert!(2 * N <= 64, "convex_hull supports up to 32 points");
+    assert!(2 * N <= T, "convex_hull supports up to {} points", T / 2);
     let mut k = 0;
     for &p in pts.iter() {
         while k >= 2 && cross(tmp[k - 2], tmp[k - 1], p) <= 0.0 {
@@ -80,6 +89,14 @@ pub fn signed_margin(poly: &[DVec2], p: DVec2) -> Option<f64> {
 pub fn stability_margin(contacts: &[DVec2], com_xy: DVec2) -> Option<f64> {
     if contacts.len() < 3 {
         return None;
+    }
+    if contacts.len() <= 8 {
+        // up to 8 feet (the metrics' case, every step with three in
+        // contact): buffers of 8 and 16 points to fill, not 16 and 64 (the
+        // same hull: `convex_hull` keeps all the points either way)
+        let mut hull = [DVec2::ZERO; 8];
+        let n = convex_hull_with(contacts, &mut hull, &mut [DVec2::ZERO; 16]);
+        return signed_margin(&hull[..n], com_xy);
     }
     let mut hull = [DVec2::ZERO; 16];
     let n = convex_hull(contacts, &mut hull);

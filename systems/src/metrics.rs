@@ -40,14 +40,25 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
     match bank {
         Some(b) => run.tau_joints.copy_from_slice(&b.applied()[..nj]),
         None => {
-            // zipped slices of one length: no bounds checks
-            let (tau, limits) = (
-                &tau_actuator[nv0..nv0 + nj],
-                &model.effort_limit[nv0..nv0 + nj],
-            );
-            for ((out, tau), lim) in run.tau_joints.iter_mut().zip(tau).zip(limits) {
-                let lim = if saturate { *lim } else { f64::INFINITY };
-                *out = tau.clamp(-lim, lim);
+            let tau = &tau_actuator[nv0..nv0 + nj];
+            if saturate {
+                // zipped slices of one length: no bounds checks; and
+                // `clamp`'s value without its `min ≤ max` assertion, whose
+                // branch kept the loop from vectorising (the step's
+                // `passive::saturate` asserts it on these same limits)
+                let limits = &model.effort_limit[nv0..nv0 + nj];
+                for ((out, &tau), &lim) in run.tau_joints.iter_mut().zip(tau).zip(limits) {
+                    *out = if tau < -lim {
+                        -lim
+                    } else if tau > lim {
+                        lim
+                    } else {
+                        tau
+                    };
+                }
+            } else {
+                // clamped to ±∞: the torques themselves
+                run.tau_joints.copy_from_slice(tau);
             }
         }
     }
