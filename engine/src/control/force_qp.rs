@@ -503,7 +503,8 @@ pub fn solve_clarabel(
 /// forming `J`: the other columns of `J` are exact zeros, whose products
 /// would leave the sums unchanged (the torques start at `+0` and never
 /// become `−0`), so the bits are those of the dense product (a unit test
-/// checks them against [`point_jacobian`]).
+/// checks them against [`point_jacobian`]); for the same reason a foot
+/// whose force is zero (a swinging or unloaded foot) is skipped.
 ///
 /// The legs' own weight is not in `τ`; add the joint rows of
 /// [`crate::nle::generalized_gravity`] for a static hold (`τ = g(q) − Jᵀ f`,
@@ -522,6 +523,12 @@ pub fn stance_torques(
     debug_assert_eq!(tau_joints.len(), nv - b);
     tau_joints.fill(0.0);
     for (&(body, point), f) in feet.iter().zip(forces) {
+        // A foot without force (swinging, unloaded) would subtract only
+        // zeros from torques that are never −0: nothing to sum (finite
+        // kinematics).
+        if *f == DVec3::ZERO {
+            continue;
+        }
         // `point_jacobian`'s nonzero joint columns, in its arithmetic
         let r = point - data.origin;
         let mut j = body;
