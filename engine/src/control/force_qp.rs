@@ -277,6 +277,7 @@ fn build(
     let n = 3 * k;
     qp.n = n;
     qp.m = 6 * k;
+    qp.foot_blocks = true;
     let sw = params.wrench_weight;
     let s_f = DMat3::from_diagonal(DVec3::new(sw[0], sw[1], sw[2]));
     let s_m = DMat3::from_diagonal(DVec3::new(sw[3], sw[4], sw[5]));
