@@ -232,7 +232,7 @@ pub fn validate(
 /// one, each with its error, only when one fails).
 fn all_valid(params: &ForceQpParams, feet: &[StanceFoot], wrench: &Force) -> bool {
     // `x.is_finite() && x >= 0.0`
-    let finite_nonneg = |x: f64| (x >= 0.0) & (x <= f64::MAX);
+    let finite_nonneg = |x: f64| (0.0..=f64::MAX).contains(&x);
     let (a, lo, hi) = (
         params.regularization,
         params.min_normal_force_n,
@@ -251,8 +251,7 @@ fn all_valid(params: &ForceQpParams, feet: &[StanceFoot], wrench: &Force) -> boo
             & norm.is_finite()
             & ((norm - 1.0).abs() <= 1e-6)
             & finite_nonneg(foot.friction)
-            & (foot.load >= 0.0)
-            & (foot.load <= 1.0);
+            & (0.0..=1.0).contains(&foot.load);
     }
     ok & wrench.lin.is_finite() & wrench.ang.is_finite()
 }
