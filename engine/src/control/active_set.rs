@@ -52,6 +52,11 @@ pub struct DenseQp {
     pub c: [[f64; MAX_VARS]; MAX_CONSTRAINTS],
     /// Constraint bounds `bᵢ`.
     pub b: [f64; MAX_CONSTRAINTS],
+    /// Whether row `i` of `C` is zero outside columns `3⌊i/6⌋..3⌊i/6⌋+3`
+    /// (the stance-force QP's shape: six constraints on each foot's force).
+    /// Products with a row are then summed over those columns, and over all
+    /// `n` only when that sum is zero (see `row_dot`): the same bits.
+    pub foot_blocks: bool,
     /// A constraint counts as violated only below `bᵢ − tolerance` (absolute,
     /// in the constraint's units): round-off must not make the method chase
     /// a constraint that holds.
@@ -67,6 +72,7 @@ impl Default for DenseQp {
             g: [0.0; MAX_VARS],
             c: [[0.0; MAX_VARS]; MAX_CONSTRAINTS],
             b: [0.0; MAX_CONSTRAINTS],
+            foot_blocks: false,
             tolerance: 1e-10,
         }
     }
@@ -180,7 +186,7 @@ impl ActiveSet {
             let mut candidate = None;
             for i in 0..m {
                 if !self.blocked[i] {
-                    let s = dot(&qp.c[i][..n], &self.x[..n]) - qp.b[i];
+                    let s = row_dot(qp, i, n, &self.x) - qp.b[i];
                     if s < worst {
                         worst = s;
                         candidate = Some(i);
@@ -194,7 +200,6 @@ impl ActiveSet {
             let mut s_p = worst;
             self.u[self.iq] = 0.0;
             self.active[self.iq] = p;
-            let np = &qp.c[p][..n];
             loop {
                 self.iterations += 1;
                 if self.iterations > max_iter {
@@ -203,7 +208,7 @@ impl ActiveSet {
                 // Step 2a: d = Jᵀ n_p; primal direction z = J₂ d₂; dual r = R⁻¹ d₁.
                 let iq = self.iq;
                 for k in 0..n {
-                    d[k] = dot(&self.jt[k][..n], np);
+                    d[k] = row_dot(qp, p, n, &self.jt[k]);
                 }
                 // z[i] = Σ_{k≥iq} J[i][k] d[k], summed along the rows of Jᵀ
                 let mut z = [-0.0; MAX_VARS];
@@ -213,7 +218,7 @@ impl ActiveSet {
                         *acc += j * w;
                     }
                 }
-                let z = &z[..n];
+                let (z_all, z) = (&z, &z[..n]);
                 for i in (0..iq).rev() {
                     let mut sum = d[i];
                     for k in i + 1..iq {
@@ -230,7 +235,7 @@ impl ActiveSet {
                         drop = Some(self.active[k]);
                     }
                 }
-                let znp = dot(z, np);
+                let znp = row_dot(qp, p, n, z_all);
                 let t2 = if dot(z, z) > f64::EPSILON * f64::EPSILON {
                     -s_p / znp
                 } else {
@@ -270,7 +275,7 @@ impl ActiveSet {
                 }
                 // Partial step: drop the blocking constraint and retry p.
                 self.delete_constraint::<N>(n, drop.expect("t1 finite"));
-                s_p = dot(np, &self.x[..n]) - qp.b[p];
+                s_p = row_dot(qp, p, n, &self.x) - qp.b[p];
             }
         }
     }
@@ -460,6 +465,27 @@ fn size<const N: usize>(runtime: usize) -> usize {
     if N == 0 { runtime } else { N }
 }
 
+/// `Σ_{j<n} c_ij x_j` for constraint row `i` of `qp`: the bits of
+/// `dot(&qp.c[i][..n], &x[..n])`. Under [`DenseQp::foot_blocks`] the sum runs
+/// over the row's three columns, and over all `n` only when that gives
+/// zero: before its first nonzero partial sum a sum is a (signed) zero and
+/// after it a zero product changes it in no bit, so a nonzero three-term
+/// sum is the full one (finite `x`).
+#[inline(always)]
+fn row_dot(qp: &DenseQp, i: usize, n: usize, x: &[f64; MAX_VARS]) -> f64 {
+    if qp.foot_blocks {
+        let lo = 3 * (i / 6);
+        if lo + 3 <= n {
+            let (c, y) = (&qp.c[i], x);
+            let s = -0.0 + c[lo] * y[lo] + c[lo + 1] * y[lo + 1] + c[lo + 2] * y[lo + 2];
+            if s != 0.0 {
+                return s;
+            }
+        }
+    }
+    dot(&qp.c[i][..n], &x[..n])
+}
+
 /// `Σ aᵢ bᵢ` in index order from `−0.0` (as `Iterator::sum`).
 #[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -519,7 +545,8 @@ mod tests {
     }
 
     /// The fixed-size paths of the stance-force QP's shapes give the bits of
-    /// the general one: random problems of that shape (1 to 4 blocks of 3
+    /// the general one, and so do the products over the feet's blocks
+    /// ([`DenseQp::foot_blocks`]): random problems of that shape (1 to 4 blocks of 3
     /// variables, 6 constraint rows each over its own block, a dense SPD
     /// Hessian) solved both ways have the same minimiser bits, errors and
     /// iteration counts. The sized solves run in a workspace filled with NaN
@@ -569,6 +596,16 @@ mod tests {
                 .map(|()| bits(&general.x[..n]));
             assert_eq!(r1, r2, "trial {trial}");
             assert_eq!(sized.iterations, general.iterations, "trial {trial}");
+            // the rows' products over their foot's block only: the same bits
+            let mut blocks = ActiveSet::default();
+            let r3 = blocks
+                .solve(&DenseQp {
+                    foot_blocks: true,
+                    ..qp.clone()
+                })
+                .map(bits);
+            assert_eq!(r1, r3, "trial {trial}");
+            assert_eq!(sized.iterations, blocks.iterations, "trial {trial}");
             if r1.is_ok() {
                 solved += 1;
                 iterations += sized.iterations;

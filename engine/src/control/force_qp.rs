@@ -36,7 +36,7 @@
 //! a standing leg makes the ground push with `f` by pushing the ground with
 //! `−f`: `τ = −Jᵀ f` ([`stance_torques`]), `J` the foot point's Jacobian.
 
-use crate::control::active_set::{ActiveSet, ActiveSetError, DenseQp};
+use crate::control::active_set::{ActiveSet, ActiveSetError, DenseQp, MAX_VARS};
 use crate::data::Data;
 #[cfg(doc)]
 use crate::jacobian::point_jacobian;
@@ -169,6 +169,9 @@ pub fn validate(
     feet: &[StanceFoot],
     wrench: &Force,
 ) -> Result<(), ForceQpError> {
+    if all_valid(params, feet, wrench) {
+        return Ok(());
+    }
     let param = |field, value, why| Err(ForceQpError::Param { field, value, why });
     if let Some(&w) = params
         .wrench_weight
@@ -224,6 +227,35 @@ pub fn validate(
     Ok(())
 }
 
+/// Whether [`validate`] finds nothing wrong: every one of its checks, as one
+/// branch-free conjunction (it runs before every solve; the checks one by
+/// one, each with its error, only when one fails).
+fn all_valid(params: &ForceQpParams, feet: &[StanceFoot], wrench: &Force) -> bool {
+    // `x.is_finite() && x >= 0.0`
+    let finite_nonneg = |x: f64| (0.0..=f64::MAX).contains(&x);
+    let (a, lo, hi) = (
+        params.regularization,
+        params.min_normal_force_n,
+        params.max_normal_force_n,
+    );
+    let mut ok = params
+        .wrench_weight
+        .iter()
+        .fold(true, |ok, &w| ok & finite_nonneg(w));
+    ok &= a.is_finite() & (a > 0.0);
+    ok &= finite_nonneg(lo) & hi.is_finite() & (hi >= lo);
+    ok &= feet.len() <= MAX_FEET;
+    for foot in feet {
+        let norm = foot.normal.length();
+        ok &= foot.position_m.is_finite()
+            & norm.is_finite()
+            & ((norm - 1.0).abs() <= 1e-6)
+            & finite_nonneg(foot.friction)
+            & (0.0..=1.0).contains(&foot.load);
+    }
+    ok & wrench.lin.is_finite() & wrench.ang.is_finite()
+}
+
 /// Writes the QP in the form `min ½ xᵀHx + gᵀx, C x ≥ b` for the loaded feet
 /// (`x` their stacked forces, world axes) and returns which input foot each
 /// 3-block of `x` belongs to (and how many).
@@ -244,6 +276,7 @@ fn build(
     let n = 3 * k;
     qp.n = n;
     qp.m = 6 * k;
+    qp.foot_blocks = true;
     let sw = params.wrench_weight;
     let s_f = DMat3::from_diagonal(DVec3::new(sw[0], sw[1], sw[2]));
     let s_m = DMat3::from_diagonal(DVec3::new(sw[3], sw[4], sw[5]));
@@ -275,8 +308,10 @@ fn build(
             .into_iter()
             .enumerate()
         {
+            // the whole row (a constant length: stores, not a `memset` call
+            // per row); the solver reads its first `n` entries
             let row = &mut qp.c[6 * a + j];
-            row[..n].fill(0.0);
+            *row = [0.0; MAX_VARS];
             row[3 * a..3 * a + 3].copy_from_slice(&c.to_array());
             qp.b[6 * a + j] = b;
         }
@@ -503,7 +538,8 @@ pub fn solve_clarabel(
 /// forming `J`: the other columns of `J` are exact zeros, whose products
 /// would leave the sums unchanged (the torques start at `+0` and never
 /// become `−0`), so the bits are those of the dense product (a unit test
-/// checks them against [`point_jacobian`]).
+/// checks them against [`point_jacobian`]); for the same reason a foot
+/// whose force is zero (a swinging or unloaded foot) is skipped.
 ///
 /// The legs' own weight is not in `τ`; add the joint rows of
 /// [`crate::nle::generalized_gravity`] for a static hold (`τ = g(q) − Jᵀ f`,
@@ -522,6 +558,12 @@ pub fn stance_torques(
     debug_assert_eq!(tau_joints.len(), nv - b);
     tau_joints.fill(0.0);
     for (&(body, point), f) in feet.iter().zip(forces) {
+        // A foot without force (swinging, unloaded) would subtract only
+        // zeros from torques that are never −0: nothing to sum (finite
+        // kinematics).
+        if *f == DVec3::ZERO {
+            continue;
+        }
         // `point_jacobian`'s nonzero joint columns, in its arithmetic
         let r = point - data.origin;
         let mut j = body;

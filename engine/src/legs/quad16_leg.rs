@@ -55,6 +55,10 @@ pub struct Quad16Leg {
     /// [`AnkleMode::FootPitch`].
     thigh: Link,
     shank: Link,
+    /// `e^{i·0} w₄`: the foot link held level ([`AnkleMode::FootPitch`]`(0)`,
+    /// the default), computed once as [`Self::pitch_chain`] would at every
+    /// solve (the same bits; saves a `sin_cos` call per solve).
+    foot_level: DVec2,
     q_index: [usize; 4],
     v_index: [usize; 4],
 }
@@ -90,6 +94,7 @@ impl Quad16Leg {
             links,
             thigh: Link::new(links[1]),
             shank: Link::new(links[2]),
+            foot_level: cmul(cis(0.0), links[3]),
             q_index: std::array::from_fn(|k| chain[k].q_index),
             v_index: std::array::from_fn(|k| chain[k].v_index),
         })
@@ -264,7 +269,12 @@ impl Quad16Leg {
         let [w1, w2, w3, w4] = self.links;
         Ok(match opts.ankle {
             AnkleMode::FootPitch(psi) => {
-                let wrist = w - w1 - cmul(cis(psi), w4);
+                let foot = if psi.to_bits() == 0.0f64.to_bits() {
+                    self.foot_level
+                } else {
+                    cmul(cis(psi), w4)
+                };
+                let wrist = w - w1 - foot;
                 let (t2, t3, out) = two_link_links(&self.thigh, &self.shank, wrist, sign, clamp)?;
                 (t2, t3, wrap_angle(psi - t2 - t3), out)
             }
