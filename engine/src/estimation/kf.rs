@@ -152,28 +152,38 @@ impl BaseKf {
             self.x[3 + k] += accel_world_mps2[k] * dt_s;
         }
         let dt2 = dt_s * dt_s;
-        let p = &mut self.p;
+        // on the column-major array: P(r, c) = p[c n + r]; column j's rows
+        // 0..6 are contiguous, so its p rows are updated as one short vector
+        let (_, p) = self.parts();
+        let at = |r: usize, c: usize| c * KF_N + r;
         let mut pp = [[0.0; 3]; 3];
         for (k, row) in pp.iter_mut().enumerate() {
             for (m, e) in row.iter_mut().enumerate() {
-                *e = p[(k, m)] + dt_s * (p[(k, 3 + m)] + p[(3 + k, m)]) + dt2 * p[(3 + k, 3 + m)];
+                *e = p[at(k, m)]
+                    + dt_s * (p[at(k, 3 + m)] + p[at(3 + k, m)])
+                    + dt2 * p[at(3 + k, 3 + m)];
             }
         }
         for j in 3..KF_N {
-            for k in 0..3 {
-                let e = p[(k, j)] + dt_s * p[(3 + k, j)];
-                p[(k, j)] = e;
-                p[(j, k)] = e;
+            let col: &mut [f64; 6] = (&mut p[at(0, j)..at(6, j)]).try_into().expect("six rows");
+            let e = [
+                col[0] + dt_s * col[3],
+                col[1] + dt_s * col[4],
+                col[2] + dt_s * col[5],
+            ];
+            col[..3].copy_from_slice(&e);
+            for (k, e) in e.into_iter().enumerate() {
+                p[at(j, k)] = e;
             }
         }
         for (k, row) in pp.iter().enumerate() {
             for (m, e) in row.iter().enumerate() {
-                p[(k, m)] = *e;
+                p[at(k, m)] = *e;
             }
         }
         for k in 0..3 {
-            p[(k, k)] += kp.position_process_std.powi(2) * dt_s;
-            p[(3 + k, 3 + k)] += kp.accel_process_std.powi(2) * dt_s;
+            p[at(k, k)] += kp.position_process_std.powi(2) * dt_s;
+            p[at(3 + k, 3 + k)] += kp.accel_process_std.powi(2) * dt_s;
         }
         for i in 0..KF_FEET {
             let s = if stance.get(i).copied().unwrap_or(false) {
@@ -183,7 +193,7 @@ impl BaseKf {
             };
             for k in 0..3 {
                 let j = 6 + 3 * i + k;
-                p[(j, j)] += s * s * dt_s;
+                p[at(j, j)] += s * s * dt_s;
             }
         }
     }
@@ -788,6 +798,71 @@ mod tests {
             kf.update(&feet[..n]);
             assert!(
                 same_bits(&kf.x, &whole.x) && same_bits(&kf.p, &whole.p),
+                "trial {trial}"
+            );
+        }
+    }
+
+    /// [`BaseKf::predict`] gives the bits of the entry-by-entry form on
+    /// nalgebra's indexing it replaced, also for an asymmetric `P` (the
+    /// same entries are read).
+    #[test]
+    fn predict_gives_the_entrywise_bits() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        for trial in 0..200 {
+            let mut kf = random_kf(&mut rng);
+            if trial % 2 == 0 {
+                kf.p[(4, 1)] += 1e-3;
+                kf.p[(0, 9)] -= 2e-3;
+            }
+            let a = DVec3::new(rng.random_range(-9.0..9.0), 0.3, -9.8);
+            let stance: Vec<bool> = (0..KF_FEET).map(|_| rng.random_bool(0.5)).collect();
+            let dt = rng.random_range(0.0..0.01);
+            let mut want = kf.clone();
+            kf.predict(a, &stance, dt);
+            let kp = want.params;
+            for k in 0..3 {
+                want.x[k] += want.x[3 + k] * dt + 0.5 * a[k] * dt * dt;
+                want.x[3 + k] += a[k] * dt;
+            }
+            let p = &mut want.p;
+            let mut pp = [[0.0; 3]; 3];
+            for (k, row) in pp.iter_mut().enumerate() {
+                for (m, e) in row.iter_mut().enumerate() {
+                    *e = p[(k, m)]
+                        + dt * (p[(k, 3 + m)] + p[(3 + k, m)])
+                        + dt * dt * p[(3 + k, 3 + m)];
+                }
+            }
+            for j in 3..KF_N {
+                for k in 0..3 {
+                    let e = p[(k, j)] + dt * p[(3 + k, j)];
+                    p[(k, j)] = e;
+                    p[(j, k)] = e;
+                }
+            }
+            for (k, row) in pp.iter().enumerate() {
+                for (m, e) in row.iter().enumerate() {
+                    p[(k, m)] = *e;
+                }
+            }
+            for k in 0..3 {
+                p[(k, k)] += kp.position_process_std.powi(2) * dt;
+                p[(3 + k, 3 + k)] += kp.accel_process_std.powi(2) * dt;
+            }
+            for (i, &st) in stance.iter().enumerate() {
+                let s = if st {
+                    kp.stance_foot_process_std
+                } else {
+                    kp.swing_foot_process_std
+                };
+                for k in 0..3 {
+                    let j = 6 + 3 * i + k;
+                    p[(j, j)] += s * s * dt;
+                }
+            }
+            assert!(
+                same_bits(&kf.x, &want.x) && same_bits(&kf.p, &want.p),
                 "trial {trial}"
             );
         }
