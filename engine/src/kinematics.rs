@@ -71,13 +71,7 @@ pub(crate) fn kinematics_level(model: &Model, data: &Data, q: &[f64], v: Option<
 #[multiversion(targets("x86_64+avx2+fma"))]
 fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let n = model.nbodies;
-    let base = match model.joint_type[0] {
-        JointType::Free => {
-            let r = DMat3::from_quat(base_quat(q));
-            Transform::new(r, DVec3::new(q[0], q[1], q[2]))
-        }
-        _ => Transform::IDENTITY,
-    };
+    let base = base_pose(model, q);
     data.origin = base.trans;
     let origin = base.trans;
     data.pose[0] = base;
@@ -95,7 +89,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
         *ir = rigid_inertia_in(&model.inertia[0], step[0], &base_rot);
     }
     if let Some(v) = v {
-        data.vel[0] = base_velocity(model, data, v);
+        data.vel[0] = base_velocity_at(model, base.rot, v);
     }
     // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
     multiversion::target::match_target! {
@@ -162,6 +156,47 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
             vel[i] = vel[p] + s * v[idx_v[i]];
         }
     }
+}
+
+/// The base's pose from `q` (the identity for a fixed base).
+#[inline(always)]
+fn base_pose(model: &Model, q: &[f64]) -> Transform {
+    match model.joint_type[0] {
+        JointType::Free => {
+            let r = DMat3::from_quat(base_quat(q));
+            Transform::new(r, DVec3::new(q[0], q[1], q[2]))
+        }
+        _ => Transform::IDENTITY,
+    }
+}
+
+/// The world position and velocity of one point on the last body of each
+/// of the four legs, at `(q, v)`: `points[k]` is in the frame of
+/// `model.leg_lanes`' last group's body `k`. The same bits as
+/// [`Data::body_point_world`] and [`Data::body_point_velocity`] after
+/// [`forward_kinematics`], without any other body's pose, subspace or
+/// velocity stored (the chains stay in AVX registers). `None` where the
+/// legs do not run in lanes (no leg plan, or a CPU without AVX2 and FMA):
+/// the caller then runs the full kinematics.
+#[multiversion(targets("x86_64+avx2+fma"))]
+pub fn leg_end_points(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    points: [DVec3; 4],
+) -> Option<([DVec3; 4], [DVec3; 4])> {
+    multiversion::target::match_target! {
+        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
+            let base = base_pose(model, q);
+            let vel0 = base_velocity_at(model, base.rot, v);
+            return Some(crate::leg_lanes::leg_end_points(
+                plan, &base, base.trans, vel0, q, v, points,
+            ));
+        },
+        _ => {},
+    }
+    let _ = (model, q, v, points);
+    None
 }
 
 /// Whether a diagonal inertia is turned by [`RigidInertia::transformed_diagonal`]
@@ -241,8 +276,13 @@ pub fn forward_kinematics_unrecorded(model: &Model, data: &mut Data, q: &[f64], 
 /// The base's spatial velocity in the reference frame from `v[0..6]` (zero for a fixed base).
 #[inline]
 pub fn base_velocity(model: &Model, data: &Data, v: &[f64]) -> Motion {
+    base_velocity_at(model, data.pose[0].rot, v)
+}
+
+/// [`base_velocity`] with the base's orientation `r`.
+#[inline]
+fn base_velocity_at(model: &Model, r: DMat3, v: &[f64]) -> Motion {
     if model.joint_type[0] == JointType::Free {
-        let r = data.pose[0].rot;
         Motion::new(
             r * DVec3::new(v[0], v[1], v[2]),
             r * DVec3::new(v[3], v[4], v[5]),

@@ -20,7 +20,9 @@ use glam::{DMat3, DQuat, DVec3};
 
 use crate::contact::ContactPoint;
 use crate::data::Data;
-use crate::kinematics::{base_quat, forward_kinematics, forward_kinematics_unrecorded};
+use crate::kinematics::{
+    base_quat, forward_kinematics, forward_kinematics_unrecorded, leg_end_points,
+};
 use crate::model::Model;
 use crate::sensors::MocapSample;
 use crate::terrain::{Terrain, TerrainUnion};
@@ -211,30 +213,69 @@ impl BaseEstimator {
         let (nj_q, nj_v) = (input.q_joints_rad.len(), input.qd_joints_radps.len());
         self.q_fk[nq0..nq0 + nj_q].copy_from_slice(input.q_joints_rad);
         self.v_fk[nv0..nv0 + nj_v].copy_from_slice(input.qd_joints_radps);
-        // on this thread's kinematics-only spare: nothing reads them later
-        Data::with_kinematics_spare(model, |data| {
-            forward_kinematics_unrecorded(model, data, &self.q_fk, &self.v_fk);
-            for (i, foot) in self.feet.iter().enumerate() {
-                let r = data.body_point_world(foot.body, foot.point_in_body);
-                let rd = data.body_point_velocity(foot.body, foot.point_in_body);
-                let rel = rot * r;
-                let foot_guess = self.kf.position_m() + rel;
-                self.meas[i] = FootMeasurement {
-                    relative_position_m: rel,
-                    relative_velocity_mps: rot * (omega.cross(r) + rd),
-                    stance: self.stance[i],
-                    ground_height_m: input
-                        .terrain
-                        .height(foot_guess.x, foot_guess.y)
-                        .map_or(foot_guess.z, |h| h + foot.radius_m),
-                };
-            }
-        });
-        // 4. measurement update
+        // each foot's position and velocity (torso frame)
+        let mut ends = [(DVec3::ZERO, DVec3::ZERO); KF_FEET];
         let n = self.feet.len();
+        let lane_ends = self.lanes_of_feet(model).and_then(|(lane, points)| {
+            leg_end_points(model, &self.q_fk, &self.v_fk, points).map(|e| (lane, e))
+        });
+        if let Some((lane, (r, rd))) = lane_ends {
+            // the feet are the legs' last bodies: their chains only
+            for (e, &k) in ends.iter_mut().zip(&lane) {
+                *e = (r[k], rd[k]);
+            }
+        } else {
+            // on this thread's kinematics-only spare: nothing reads it later
+            Data::with_kinematics_spare(model, |data| {
+                forward_kinematics_unrecorded(model, data, &self.q_fk, &self.v_fk);
+                for (e, foot) in ends.iter_mut().zip(&self.feet) {
+                    *e = (
+                        data.body_point_world(foot.body, foot.point_in_body),
+                        data.body_point_velocity(foot.body, foot.point_in_body),
+                    );
+                }
+            });
+        }
+        for (i, (foot, &(r, rd))) in self.feet.iter().zip(&ends[..n]).enumerate() {
+            let rel = rot * r;
+            let foot_guess = self.kf.position_m() + rel;
+            self.meas[i] = FootMeasurement {
+                relative_position_m: rel,
+                relative_velocity_mps: rot * (omega.cross(r) + rd),
+                stance: self.stance[i],
+                ground_height_m: input
+                    .terrain
+                    .height(foot_guess.x, foot_guess.y)
+                    .map_or(foot_guess.z, |h| h + foot.radius_m),
+            };
+        }
+        // 4. measurement update
         self.kf.update(&self.meas[..n]);
         self.set_estimate(input.t_s, omega, input.terrain);
         self.remember();
+    }
+
+    /// Where the feet are on `model`'s legs in lanes: when each of the
+    /// [`KF_FEET`] feet is on the last body of a different leg of
+    /// [`Model::leg_lanes`], the lane of each foot and each lane's foot
+    /// point (in its body's frame), for [`leg_end_points`].
+    fn lanes_of_feet(&self, model: &Model) -> Option<([usize; KF_FEET], [DVec3; KF_FEET])> {
+        let last = model.leg_lanes.as_ref()?.groups.last()?;
+        if self.feet.len() != KF_FEET {
+            return None;
+        }
+        let mut lane = [0; KF_FEET];
+        let mut points = [DVec3::ZERO; KF_FEET];
+        let mut taken = [false; KF_FEET];
+        for (l, foot) in lane.iter_mut().zip(&self.feet) {
+            let k = last.iter().position(|&b| b == foot.body)?;
+            if std::mem::replace(&mut taken[k], true) {
+                return None;
+            }
+            *l = k;
+            points[k] = foot.point_in_body;
+        }
+        Some((lane, points))
     }
 
     /// The estimate from the filters' state at `t_s`, with the angular

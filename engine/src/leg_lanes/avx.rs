@@ -9,7 +9,7 @@ use super::x4::{
 };
 use crate::data::Data;
 use crate::model::{JointType, Model};
-use crate::spatial::{Force, Motion, RigidInertia, Sym6};
+use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
 
 /// One group's constants (the same [`crate::model::PoseStep`] shortcuts hold
@@ -123,6 +123,65 @@ fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
     F4::from_array([x[idx[0]], x[idx[1]], x[idx[2]], x[idx[3]]])
 }
 
+/// One group's pose `x`, its origin relative to the reference point `r` and
+/// its motion subspace `s` (reference frame), from the parents' poses `xp`
+/// (`kinematics::poses`, statement for statement). A macro, not a function:
+/// an AVX function is not inlined into its two callers.
+macro_rules! group_pose {
+    ($st:expr, $xp:expr, $origin:expr, $q:expr) => {{
+        let (st, xp): (&GroupStep, &Transform4) = ($st, $xp);
+        // The joint frame: parent pose ∘ placement, with the same skips.
+        let rot_j = if st.rotates {
+            xp.rot.mul_mat3(st.placement.rot)
+        } else {
+            xp.rot
+        };
+        let trans_j = if st.translates {
+            xp.rot.mul_vec3(st.placement.trans).add(xp.trans)
+        } else {
+            xp.trans
+        };
+        let qi = gather($q, &st.idx_q);
+        let col = rot_j.col(st.axis);
+        let x = Transform4::new(
+            rotate_about_axis(rot_j, st.axis, F4::splat(st.sign).mul(qi)),
+            trans_j,
+        );
+        let aw = if st.sign > 0.0 { col } else { col.neg() };
+        let r = x.trans.sub($origin);
+        (x, r, Motion4::new(r.cross(aw), aw))
+    }};
+}
+
+/// The world position and velocity of one point on each leg's last body
+/// (`points[k]` in the frame of `plan.groups.last()[k]`), from the base's
+/// pose `base`, the reference point `origin` and the base's velocity
+/// `vel0`: the chain of [`poses_legs`] kept in registers, nothing stored,
+/// then `Data::body_point_world` and `Data::body_point_velocity` per lane.
+/// The same bits as those after a full forward kinematics.
+#[target_feature(enable = "avx")]
+pub(crate) fn leg_end_points(
+    plan: &LegLanes,
+    base: &Transform,
+    origin: DVec3,
+    vel0: Motion,
+    q: &[f64],
+    v: &[f64],
+    points: [DVec3; LEGS],
+) -> ([DVec3; LEGS], [DVec3; LEGS]) {
+    let origin = V3::splat(origin);
+    let mut xp = Transform4::new(M3::splat(base.rot), V3::splat(base.trans));
+    let mut vp = Motion4::splat(vel0);
+    for st in &plan.steps {
+        let (x, _, s) = group_pose!(st, &xp, origin, q);
+        vp = vp.add(s.scale(gather(v, &st.idx_v)));
+        xp = x;
+    }
+    let p = xp.transform_point(V3::from_lanes(points));
+    let pv = vp.lin.add(vp.ang.cross(p.sub(origin)));
+    (p.lanes(), pv.lanes())
+}
+
 /// The legs' part of forward kinematics (`kinematics::poses`), after the
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
@@ -145,26 +204,7 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     for (grp, st) in plan.groups.iter().zip(&plan.steps) {
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
-        // The joint frame: parent pose ∘ placement, with the same skips.
-        let rot_j = if st.rotates {
-            xp.rot.mul_mat3(st.placement.rot)
-        } else {
-            xp.rot
-        };
-        let trans_j = if st.translates {
-            xp.rot.mul_vec3(st.placement.trans).add(xp.trans)
-        } else {
-            xp.trans
-        };
-        let qi = gather(q, &st.idx_q);
-        let col = rot_j.col(st.axis);
-        let x = Transform4::new(
-            rotate_about_axis(rot_j, st.axis, F4::splat(st.sign).mul(qi)),
-            trans_j,
-        );
-        let aw = if st.sign > 0.0 { col } else { col.neg() };
-        let r = x.trans.sub(origin);
-        let s = Motion4::new(r.cross(aw), aw);
+        let (x, r, s) = group_pose!(st, &xp, origin, q);
         let (xs, ss) = (x.lanes(), s.lanes());
         for k in 0..LEGS {
             let i = bodies[k];

@@ -25,7 +25,8 @@ mod x4;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use avx::{
-    GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, poses_legs, reserve_workspace, rnea_passes_legs,
+    GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, poses_legs, reserve_workspace,
+    rnea_passes_legs,
 };
 
 use crate::model::{JointType, Model};
@@ -228,6 +229,78 @@ mod tests {
                     "{name} {base:?} trial {trial}"
                 );
             }
+        }
+    }
+
+    /// [`crate::kinematics::leg_end_points`] gives the bits of
+    /// `Data::body_point_world` and `Data::body_point_velocity` after the
+    /// full kinematics on the general path, at random states and points,
+    /// floating and fixed base (the estimator's feet, base at rest, among
+    /// them); a model without the leg plan gets `None`.
+    #[test]
+    fn leg_end_points_give_the_full_kinematics_bits() {
+        use crate::kinematics::leg_end_points;
+        use crate::leg_lanes::LEGS;
+        for base in [BaseKind::Floating, BaseKind::Fixed] {
+            let (fast, general) = fast_and_general("quad16", base);
+            let plan = fast.leg_lanes.as_ref().expect("quad16's legs in lanes");
+            let last = *plan.groups.last().unwrap();
+            let mut r = ChaCha8Rng::seed_from_u64(11);
+            for trial in 0..100 {
+                let mut q = fast.neutral_q();
+                let nb = fast.base_nq();
+                let mut v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
+                if fast.is_floating() && trial % 2 == 0 {
+                    let axis = DVec3::new(
+                        r.random_range(-1.0..1.0),
+                        r.random_range(-1.0..1.0),
+                        r.random_range(-1.0..1.0),
+                    )
+                    .normalize();
+                    let quat = DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
+                    q[..7].copy_from_slice(&[
+                        r.random_range(-5.0..5.0),
+                        r.random_range(-5.0..5.0),
+                        r.random_range(0.0..1.0),
+                        quat.x,
+                        quat.y,
+                        quat.z,
+                        quat.w,
+                    ]);
+                } else if fast.is_floating() {
+                    // the estimator's case: the base at the origin, at rest
+                    v[..6].fill(0.0);
+                }
+                for x in &mut q[nb..] {
+                    *x = r.random_range(-3.0..3.0);
+                }
+                let points: [DVec3; LEGS] = std::array::from_fn(|_| {
+                    DVec3::new(
+                        r.random_range(-0.1..0.1),
+                        r.random_range(-0.1..0.1),
+                        r.random_range(-0.3..0.0),
+                    )
+                });
+                let (p, pv) = leg_end_points(&fast, &q, &v, points).expect("lanes on this CPU");
+                let mut d = Data::for_kinematics(&general);
+                forward_kinematics(&general, &mut d, &q, &v);
+                for k in 0..LEGS {
+                    let want = (
+                        d.body_point_world(last[k], points[k]),
+                        d.body_point_velocity(last[k], points[k]),
+                    );
+                    let got = [p[k].to_array(), pv[k].to_array()].concat();
+                    let want = [want.0.to_array(), want.1.to_array()].concat();
+                    assert_eq!(bits(&got), bits(&want), "{base:?} trial {trial} leg {k}");
+                }
+            }
+            let none = leg_end_points(
+                &general,
+                &fast.neutral_q(),
+                &vec![0.0; fast.nv],
+                [DVec3::ZERO; LEGS],
+            );
+            assert!(none.is_none());
         }
     }
 
