@@ -331,12 +331,22 @@ fn measure(
             .try_into()
             .expect("a column of P")
     };
-    let mut u = *col(a);
+    // `u[a]` and `u[b]` are also carried as scalars (`ua`, `ub`: the same
+    // operations in the same order, so the same bits): read at a run-time
+    // index, `u` would live in memory instead of registers (about 60
+    // instructions more per measurement).
+    let pa = col(a);
+    let mut u = *pa;
+    let mut ua = pa[a];
+    let mut ub = b.map_or(0.0, |b| pa[b]);
     let mut hx = x[a];
     if let Some(b) = b {
-        for (u, pb) in u.iter_mut().zip(col(b)) {
+        let pb = col(b);
+        for (u, pb) in u.iter_mut().zip(pb) {
             *u -= pb;
         }
+        ua -= pb[a];
+        ub -= pb[b];
         hx -= x[b];
     }
     for g in &block.g[..block.n] {
@@ -344,8 +354,12 @@ fn measure(
         for (u, g) in u.iter_mut().zip(g) {
             *u -= g * c;
         }
+        ua -= g[a] * c;
+        if let Some(b) = b {
+            ub -= g[b] * c;
+        }
     }
-    let s = u[a] - b.map_or(0.0, |b| u[b]) + r;
+    let s = ua - ub + r;
     // (a block holds at most a foot's 7 measurements: [`update_feet`] applies
     // it after each foot)
     if s <= 0.0 || !s.is_finite() || block.n >= BLOCK {
