@@ -286,10 +286,11 @@ fn update_feet_body(kp: &KfParams, x: &mut [f64; KF_N], p: &mut Cov, feet: &[Foo
             // a slipping or still-landing foot moves: reject its velocity
             // when the innovation is beyond the gate (χ² with 3 dof)
             let z = -m.relative_velocity_mps;
+            let var = velocity_variances(p, &block);
             let mut chi2 = 0.0;
             for k in 0..3 {
                 let d = z[k] - x[3 + k];
-                chi2 += d * d / (variance(p, &block, 3 + k) + rv);
+                chi2 += d * d / (var[k] + rv);
             }
             if kp.velocity_gate_chi2 <= 0.0 || chi2 <= kp.velocity_gate_chi2 {
                 for k in 0..3 {
@@ -331,12 +332,22 @@ fn measure(
             .try_into()
             .expect("a column of P")
     };
-    let mut u = *col(a);
+    // `u[a]` and `u[b]` are also carried as scalars (`ua`, `ub`: the same
+    // operations in the same order, so the same bits): read at a run-time
+    // index, `u` would live in memory instead of registers (about 60
+    // instructions more per measurement).
+    let pa = col(a);
+    let mut u = *pa;
+    let mut ua = pa[a];
+    let mut ub = b.map_or(0.0, |b| pa[b]);
     let mut hx = x[a];
     if let Some(b) = b {
-        for (u, pb) in u.iter_mut().zip(col(b)) {
+        let pb = col(b);
+        for (u, pb) in u.iter_mut().zip(pb) {
             *u -= pb;
         }
+        ua -= pb[a];
+        ub -= pb[b];
         hx -= x[b];
     }
     for g in &block.g[..block.n] {
@@ -344,8 +355,12 @@ fn measure(
         for (u, g) in u.iter_mut().zip(g) {
             *u -= g * c;
         }
+        ua -= g[a] * c;
+        if let Some(b) = b {
+            ub -= g[b] * c;
+        }
     }
-    let s = u[a] - b.map_or(0.0, |b| u[b]) + r;
+    let s = ua - ub + r;
     // (a block holds at most a foot's 7 measurements: [`update_feet`] applies
     // it after each foot)
     if s <= 0.0 || !s.is_finite() || block.n >= BLOCK {
@@ -362,12 +377,16 @@ fn measure(
     block.n += 1;
 }
 
-/// The variance of `x[j]` now, the block's downdates included.
+/// The variances of the base velocity `x[3..6]` now, the block's
+/// downdates included: one pass over the block for the three (each is
+/// still `P_jj − g_0j² − g_1j² − …` in that order).
 #[inline(always)]
-fn variance(p: &Cov, block: &Downdates, j: usize) -> f64 {
-    let mut v = p[j * KF_N + j];
+fn velocity_variances(p: &Cov, block: &Downdates) -> [f64; 3] {
+    let mut v: [f64; 3] = std::array::from_fn(|k| p[(3 + k) * KF_N + 3 + k]);
     for g in &block.g[..block.n] {
-        v -= g[j] * g[j];
+        for (v, g) in v.iter_mut().zip(&g[3..6]) {
+            *v -= g * g;
+        }
     }
     v
 }
@@ -757,10 +776,11 @@ mod tests {
             }
             if m.stance {
                 let z = -m.relative_velocity_mps;
+                let var = velocity_variances(p, &block);
                 let mut chi2 = 0.0;
                 for k in 0..3 {
                     let d = z[k] - x[3 + k];
-                    chi2 += d * d / (variance(p, &block, 3 + k) + rv);
+                    chi2 += d * d / (var[k] + rv);
                 }
                 if kp.velocity_gate_chi2 <= 0.0 || chi2 <= kp.velocity_gate_chi2 {
                     for k in 0..3 {

@@ -124,19 +124,22 @@ impl Encoders {
             .iter_mut()
             .zip(q_rad.iter().zip(qd_radps))
             .zip(self.position_rad.iter_mut().zip(&mut self.velocity_radps));
+        // the velocity's source decided once for every joint
+        let velocity = match self.params.velocity {
+            JointVelocityMode::Direct { noise_std_radps } => Some(noise_std_radps),
+            JointVelocityMode::Differencing { .. } => None,
+        };
+        let differences = self.sampled && dt > 0.0;
         for ((ch, (&q, &qd)), (pos, vel)) in joints {
             let theta = ch.sample(q, dt, &mut self.rng);
             let n = gaussian(&mut self.rng);
-            let w = match self.params.velocity {
-                JointVelocityMode::Direct { noise_std_radps } => qd + noise_std_radps * n,
-                JointVelocityMode::Differencing { .. } => {
-                    if self.sampled && dt > 0.0 {
-                        let raw = (theta - *pos) / dt;
-                        *vel + alpha * (raw - *vel)
-                    } else {
-                        0.0
-                    }
+            let w = match velocity {
+                Some(noise_std_radps) => qd + noise_std_radps * n,
+                None if differences => {
+                    let raw = (theta - *pos) / dt;
+                    *vel + alpha * (raw - *vel)
                 }
+                None => 0.0,
             };
             *pos = theta;
             *vel = w;
