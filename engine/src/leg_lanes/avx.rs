@@ -249,7 +249,8 @@ fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6
 }
 
 /// ABA's three passes after forward kinematics, legs in lanes
-/// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
+/// (`aba::aba_passes`): fills `ddq`, the base's `acc` and, with `body_acc`,
+/// the legs' `acc`; ABA's per-body workspace
 /// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) is in the thread's per-group
 /// workspace and locals instead.
 #[target_feature(enable = "avx")]
@@ -260,6 +261,7 @@ pub(crate) fn aba_passes_legs(
     v: &[f64],
     tau: &[f64],
     use_external: bool,
+    body_acc: bool,
 ) {
     let n = model.nbodies;
     let nv = model.nv;
@@ -360,10 +362,15 @@ pub(crate) fn aba_passes_legs(
             .sub(w.u.ang.dot(a.ang))
             .mul(w.d_inv);
         let a_i = a.add(w.s.scale(qdd));
-        let (qdds, accs) = (qdd.to_array(), a_i.add(a_grav_l).lanes());
+        let qdds = qdd.to_array();
         for k in 0..LEGS {
             ddq[st.idx_v[k]] = qdds[k];
-            acc[grp[k]] = accs[k];
+        }
+        if body_acc {
+            let accs = a_i.add(a_grav_l).lanes();
+            for k in 0..LEGS {
+                acc[grp[k]] = accs[k];
+            }
         }
         a_parent = a_i;
     }
