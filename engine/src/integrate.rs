@@ -626,8 +626,10 @@ pub fn integrate_q(model: &Model, q: &[f64], v: &[f64], dt_s: f64, q_out: &mut [
             p.x, p.y, p.z, quat_new.x, quat_new.y, quat_new.z, quat_new.w,
         ]);
     }
-    for (k, qo) in q_out[bq..].iter_mut().enumerate() {
-        *qo = q[bq + k] + v[bv + k] * dt_s;
+    let nj = q_out.len() - bq;
+    let (q_j, v_j) = (&q[bq..bq + nj], &v[bv..bv + nj]);
+    for ((qo, &qi), &vi) in q_out[bq..].iter_mut().zip(q_j).zip(v_j) {
+        *qo = qi + vi * dt_s;
     }
 }
 
