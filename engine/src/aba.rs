@@ -28,21 +28,48 @@ pub fn aba_from_kinematics(
     tau: &[f64],
     use_external: bool,
 ) {
-    aba_passes(model, data, v, tau, use_external);
+    aba_passes(model, data, v, tau, use_external, true);
+}
+
+/// [`aba_from_kinematics`] for the integrator, which needs `ddq` only: the
+/// bodies' accelerations `data.acc` but the base's are left unspecified
+/// (the legs-in-lanes path does not store them; nothing on the step path
+/// reads them, and [`crate::integrate::step`] documents it).
+pub(crate) fn aba_ddq_from_kinematics(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    tau: &[f64],
+    use_external: bool,
+) {
+    aba_passes(model, data, v, tau, use_external, false);
 }
 
 /// The three passes of [`aba_from_kinematics`], compiled for x86-64-v3 (AVX2,
 /// FMA) and the generic target with the CPU's choice at the first call; the
 /// results are the same bits either way (nothing is fused into an FMA).
+/// Without `body_acc` the lane path skips the legs' `acc` (the general path
+/// needs them as it goes and fills them anyway).
 #[multiversion(targets("x86_64+avx2+fma"))]
-fn aba_passes(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_external: bool) {
+fn aba_passes(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    tau: &[f64],
+    use_external: bool,
+    body_acc: bool,
+) {
     // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
     multiversion::target::match_target! {
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
-            return crate::leg_lanes::aba_passes_legs(model, plan, data, v, tau, use_external);
+            return crate::leg_lanes::aba_passes_legs(
+                model, plan, data, v, tau, use_external, body_acc,
+            );
         },
         _ => {},
     }
+    // the general path keeps `acc` as it goes: it fills them either way
+    let _ = body_acc;
     let n = model.nbodies;
     let nv = model.nv;
     // Slices of known length up front, so that the loops below index

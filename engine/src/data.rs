@@ -32,7 +32,9 @@ pub struct Data {
     pub inertia_ref: Vec<RigidInertia>,
 
     // --- dynamics (rnea / aba / crba) ---
-    /// Spatial acceleration of each body, reference frame (nbodies).
+    /// Spatial acceleration of each body, reference frame (nbodies). ABA and
+    /// RNEA fill it; after [`crate::integrate::step`] only the base's entry is
+    /// defined (see there).
     pub acc: Vec<Motion>,
     /// Spatial force transmitted by each body's parent joint (RNEA), reference frame (nbodies).
     pub f: Vec<Force>,

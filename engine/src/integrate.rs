@@ -10,7 +10,7 @@
 //!    at this `q̇` plus its friction ([`crate::actuator_model`]);
 //! 3. the caller's [`ForceModel`], which adds contact/push forces to `data.f_ext`
 //!    and generalised forces to `τ`;
-//! 4. [`aba_from_kinematics`] for `v̇`, or, when the workspace carries
+//! 4. [`crate::aba::aba_from_kinematics`] for `v̇`, or, when the workspace carries
 //!    [`ImposedJoints`] (hybrid dynamics), [`hybrid_acceleration`]: the joint
 //!    accelerations are imposed and the base's follows from the dynamics.
 //!
@@ -21,7 +21,7 @@
 //! a floating base `ṗ = R v_lin` and `q̇uat = ½ quat ⊗ (0, ω)` with `v_lin`, `ω`
 //! in the base frame; joints `q̇ = v`.
 
-use crate::aba::aba_from_kinematics;
+use crate::aba::aba_ddq_from_kinematics;
 use crate::actuator_model::ActuatorBank;
 use crate::crba::crba_from_kinematics;
 use crate::data::Data;
@@ -324,6 +324,10 @@ impl Rk4Stages {
 ///
 /// Afterwards `data` holds the kinematics and dynamics of the last derivative
 /// evaluation (not of the new state): run kinematics again before reading it.
+/// The bodies' accelerations `data.acc` but the base's are not among them
+/// (ABA there fills only what the integrator needs, `ddq`; the legs-in-lanes
+/// path leaves the legs' entries as they were): run
+/// [`crate::aba::aba_from_kinematics`] or RNEA for them.
 pub fn step<F: ForceModel>(
     model: &Model,
     data: &mut Data,
@@ -489,7 +493,7 @@ fn acceleration<F: ForceModel>(
     forces.apply(model, data, q, v, tau);
     match imposed {
         None => {
-            aba_from_kinematics(model, data, v, tau, true);
+            aba_ddq_from_kinematics(model, data, v, tau, true);
             a_out.copy_from_slice(&data.ddq);
         }
         Some((m, s)) => {
@@ -622,8 +626,10 @@ pub fn integrate_q(model: &Model, q: &[f64], v: &[f64], dt_s: f64, q_out: &mut [
             p.x, p.y, p.z, quat_new.x, quat_new.y, quat_new.z, quat_new.w,
         ]);
     }
-    for (k, qo) in q_out[bq..].iter_mut().enumerate() {
-        *qo = q[bq + k] + v[bv + k] * dt_s;
+    let nj = q_out.len() - bq;
+    let (q_j, v_j) = (&q[bq..bq + nj], &v[bv..bv + nj]);
+    for ((qo, &qi), &vi) in q_out[bq..].iter_mut().zip(q_j).zip(v_j) {
+        *qo = qi + vi * dt_s;
     }
 }
 

@@ -116,7 +116,10 @@ pub fn saturate(model: &Model, params: &PassiveParams, tau_actuator: &[f64], tau
         .zip(tau_actuator)
         .zip(&model.effort_limit)
     {
-        *out = t.clamp(-lim, lim);
+        // `t.clamp(-lim, lim)`'s value, without its `min <= max` assertion
+        // (a panic path per entry that keeps the loop from vectorising)
+        let low = if t < -lim { -lim } else { t };
+        *out = if low > lim { lim } else { low };
     }
 }
 
@@ -132,27 +135,37 @@ pub fn add_passive_torques(
     tau: &mut [f64],
 ) {
     debug_assert_eq!(tau.len(), model.nv);
-    for b in 1..model.nbodies {
-        let iv = model.idx_v[b];
-        let qd = v[iv];
+    // Each movable joint (body 1..nbodies) has one coordinate in q and in v,
+    // at the same rank after the base's: joint j is q[bq + j] and v[bv + j].
+    // Walking the joints in that order (each writes only its own entry, so
+    // the order does not matter) over slices of one length needs no index
+    // tables and no bounds checks.
+    let (bq, bv, nv) = (model.base_nq(), model.base_nv(), model.nv);
+    let nj = nv - bv;
+    debug_assert!((1..model.nbodies).all(|b| model.idx_q[b] - bq == model.idx_v[b] - bv));
+    let (q_j, v_j, tau_j) = (&q[bq..bq + nj], &v[bv..nv], &mut tau[bv..nv]);
+    let (damping, friction) = (&model.damping[bv..nv], &model.friction[bv..nv]);
+    let (lower, upper) = (&model.lower_limit[bv..nv], &model.upper_limit[bv..nv]);
+    for j in 0..nj {
+        let qd = v_j[j];
         let mut t = 0.0;
         if params.damping {
-            t += damping_torque(model.damping[iv], qd);
+            t += damping_torque(damping[j], qd);
         }
         if params.friction {
-            t += friction_torque(model.friction[iv], qd, params.friction_epsilon);
+            t += friction_torque(friction[j], qd, params.friction_epsilon);
         }
         if params.limits {
             t += limit_torque(
-                q[model.idx_q[b]],
+                q_j[j],
                 qd,
-                model.lower_limit[iv],
-                model.upper_limit[iv],
+                lower[j],
+                upper[j],
                 params.limit_stiffness,
                 params.limit_damping,
             );
         }
-        tau[iv] += t;
+        tau_j[j] += t;
     }
     spring_torques(model, q, v, tau);
 }

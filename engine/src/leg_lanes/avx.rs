@@ -5,7 +5,7 @@
 use super::LEGS;
 use super::LegLanes;
 use super::x4::{
-    F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis,
+    F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis, transpose4,
 };
 use crate::data::Data;
 use crate::model::{JointType, Model};
@@ -249,7 +249,8 @@ fn base_pass1(inertia: &RigidInertia, vi: Motion, f_ext: Option<Force>) -> (Sym6
 }
 
 /// ABA's three passes after forward kinematics, legs in lanes
-/// (`aba::aba_passes`): fills `ddq` and `acc`; ABA's per-body workspace
+/// (`aba::aba_passes`): fills `ddq`, the base's `acc` and, with `body_acc`,
+/// the legs' `acc`; ABA's per-body workspace
 /// (`ia`, `pa`, `u`, `d_inv`, `u_tau`, `c`) is in the thread's per-group
 /// workspace and locals instead.
 #[target_feature(enable = "avx")]
@@ -260,6 +261,7 @@ pub(crate) fn aba_passes_legs(
     v: &[f64],
     tau: &[f64],
     use_external: bool,
+    body_acc: bool,
 ) {
     let n = model.nbodies;
     let nv = model.nv;
@@ -291,6 +293,12 @@ pub(crate) fn aba_passes_legs(
         if use_external {
             pai = pai.sub(Force4::from_lanes(grp.map(|i| f_ext[i])));
         }
+        // one check for the gathers of v, armature and tau below
+        let [j0, j1, j2, j3] = st.idx_v;
+        assert!(
+            (j0 < nv) & (j1 < nv) & (j2 < nv) & (j3 < nv),
+            "leg joints within nv"
+        );
         let c = vi.cross(s.scale(gather(v, &st.idx_v)));
         if let Some((cia, cpa)) = child {
             ia = ia.add(cia);
@@ -320,13 +328,7 @@ pub(crate) fn aba_passes_legs(
     // The hips' terms into the base, in decreasing body index (lane 3 first),
     // as the general path's reverse depth order adds them.
     if let Some((term, pa)) = child {
-        let (terms, pas) = (term.lanes(), pa.lanes());
-        for k in (0..LEGS).rev() {
-            ia0.m += terms[k].m;
-            ia0.h += terms[k].h;
-            ia0.i += terms[k].i;
-            pa0 += pas[k];
-        }
+        add_hips_into_base(&mut ia0, &mut pa0, &term, &pa);
     }
     // Pass 3: accelerations, root to leaves; gravity as a fictitious upward
     // acceleration of the base.
@@ -360,10 +362,20 @@ pub(crate) fn aba_passes_legs(
             .sub(w.u.ang.dot(a.ang))
             .mul(w.d_inv);
         let a_i = a.add(w.s.scale(qdd));
-        let (qdds, accs) = (qdd.to_array(), a_i.add(a_grav_l).lanes());
+        let qdds = qdd.to_array();
+        let [j0, j1, j2, j3] = st.idx_v;
+        assert!(
+            (j0 < nv) & (j1 < nv) & (j2 < nv) & (j3 < nv),
+            "leg joints within nv"
+        );
         for k in 0..LEGS {
             ddq[st.idx_v[k]] = qdds[k];
-            acc[grp[k]] = accs[k];
+        }
+        if body_acc {
+            let accs = a_i.add(a_grav_l).lanes();
+            for k in 0..LEGS {
+                acc[grp[k]] = accs[k];
+            }
         }
         a_parent = a_i;
     }
@@ -375,6 +387,51 @@ pub(crate) fn aba_passes_legs(
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
     GROUP_ABA.with(|cell| drop(cell.replace(work_all)));
+}
+
+/// `ia0 += Σ term` and `pa0 += Σ pa` over the lanes, lane 3 first, each
+/// element's sum in that order as the scalar `+=` per lane gives it. Four
+/// elements at a time: their 4×4 block of (element, lane) is transposed so
+/// that one AVX add adds one lane's term to four elements.
+#[inline]
+#[target_feature(enable = "avx")]
+fn add_hips_into_base(ia0: &mut Sym6, pa0: &mut Force, term: &Sym6x4, pa: &Force4) {
+    let m3 = |m: &M3| {
+        let (x, y, z) = (m.x_axis, m.y_axis, m.z_axis);
+        [x.x, x.y, x.z, y.x, y.y, y.z, z.x, z.y, z.z]
+    };
+    let (tm, th, ti) = (m3(&term.m), m3(&term.h), m3(&term.i));
+    let zero = F4::splat(0.0);
+    let lanes: [F4; 36] = [
+        tm[0], tm[1], tm[2], tm[3], tm[4], tm[5], tm[6], tm[7], tm[8], //
+        th[0], th[1], th[2], th[3], th[4], th[5], th[6], th[7], th[8], //
+        ti[0], ti[1], ti[2], ti[3], ti[4], ti[5], ti[6], ti[7], ti[8], //
+        pa.lin.x, pa.lin.y, pa.lin.z, pa.ang.x, pa.ang.y, pa.ang.z, zero, zero, zero,
+    ];
+    let (bm, bh, bi) = (
+        ia0.m.to_cols_array(),
+        ia0.h.to_cols_array(),
+        ia0.i.to_cols_array(),
+    );
+    let (bl, ba) = (pa0.lin, pa0.ang);
+    let mut base: [f64; 36] = [
+        bm[0], bm[1], bm[2], bm[3], bm[4], bm[5], bm[6], bm[7], bm[8], //
+        bh[0], bh[1], bh[2], bh[3], bh[4], bh[5], bh[6], bh[7], bh[8], //
+        bi[0], bi[1], bi[2], bi[3], bi[4], bi[5], bi[6], bi[7], bi[8], //
+        bl.x, bl.y, bl.z, ba.x, ba.y, ba.z, 0.0, 0.0, 0.0,
+    ];
+    for (b, t) in base.chunks_exact_mut(LEGS).zip(lanes.chunks_exact(LEGS)) {
+        let by_lane = transpose4([t[0], t[1], t[2], t[3]]);
+        let mut sum = F4::from_array([b[0], b[1], b[2], b[3]]);
+        for k in (0..LEGS).rev() {
+            sum = sum.add(by_lane[k]);
+        }
+        b.copy_from_slice(&sum.to_array());
+    }
+    let mat = |k: usize| glam::DMat3::from_cols_slice(&base[9 * k..9 * k + 9]);
+    (ia0.m, ia0.h, ia0.i) = (mat(0), mat(1), mat(2));
+    pa0.lin = DVec3::new(base[27], base[28], base[29]);
+    pa0.ang = DVec3::new(base[30], base[31], base[32]);
 }
 
 /// Deepest legs [`rnea_passes_legs`] takes (its per-group forces live on

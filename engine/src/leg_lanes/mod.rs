@@ -237,6 +237,38 @@ mod tests {
     /// full kinematics on the general path, at random states and points,
     /// floating and fixed base (the estimator's feet, base at rest, among
     /// them); a model without the leg plan gets `None`.
+    /// The integrator's ABA (no legs' `acc`) gives `aba_from_kinematics`'s
+    /// `ddq` and base acceleration, bit for bit.
+    #[test]
+    fn ddq_only_aba_gives_the_same_ddq() {
+        use crate::aba::aba_ddq_from_kinematics;
+        let (fast, _) = fast_and_general("quad16", BaseKind::Floating);
+        let mut r = ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..20 {
+            let mut q = fast.neutral_q();
+            for x in &mut q[7..] {
+                *x = r.random_range(-3.0..3.0);
+            }
+            let v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
+            let tau: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-50.0..50.0)).collect();
+            let mut outs = Vec::new();
+            for ddq_only in [false, true] {
+                let mut d = Data::new(&fast);
+                forward_kinematics(&fast, &mut d, &q, &v);
+                set_external_forces(&mut d);
+                if ddq_only {
+                    aba_ddq_from_kinematics(&fast, &mut d, &v, &tau, true);
+                } else {
+                    aba_from_kinematics(&fast, &mut d, &v, &tau, true);
+                }
+                let mut all = d.ddq.clone();
+                all.extend(d.acc[0].to_array());
+                outs.push(bits(&all));
+            }
+            assert_eq!(outs[0], outs[1]);
+        }
+    }
+
     #[test]
     fn leg_end_points_give_the_full_kinematics_bits() {
         use crate::kinematics::leg_end_points;

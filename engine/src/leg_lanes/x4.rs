@@ -9,11 +9,12 @@
 //! are `#[target_feature(enable = "avx")]`: safe to call from code compiled
 //! for AVX (the x86-64-v3 clones of the dispatched passes), and only from there.
 
-use crate::spatial::{Force, Motion, Sym6, Transform};
+use crate::spatial::{Force, Motion, Transform};
 use core::arch::x86_64::{
     __m256d, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _CMP_NLT_UQ,
     _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
-    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_sub_pd, _mm256_xor_pd,
+    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_permute2f128_pd, _mm256_set1_pd,
+    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd,
 };
 use glam::{DMat3, DVec3};
 
@@ -208,6 +209,23 @@ impl F4 {
 }
 
 /// A 3-vector per lane (glam's `DVec3`).
+/// The 4×4 transpose: lane `k` of entry `j` of the result is lane `j` of
+/// entry `k` of `r` (eight shuffles, no arithmetic).
+#[inline]
+#[target_feature(enable = "avx")]
+pub fn transpose4(r: [F4; 4]) -> [F4; 4] {
+    let lo01 = _mm256_unpacklo_pd(r[0].0, r[1].0); // a0 b0 a2 b2
+    let hi01 = _mm256_unpackhi_pd(r[0].0, r[1].0); // a1 b1 a3 b3
+    let lo23 = _mm256_unpacklo_pd(r[2].0, r[3].0); // c0 d0 c2 d2
+    let hi23 = _mm256_unpackhi_pd(r[2].0, r[3].0); // c1 d1 c3 d3
+    [
+        F4(_mm256_permute2f128_pd::<0x20>(lo01, lo23)),
+        F4(_mm256_permute2f128_pd::<0x20>(hi01, hi23)),
+        F4(_mm256_permute2f128_pd::<0x31>(lo01, lo23)),
+        F4(_mm256_permute2f128_pd::<0x31>(hi01, hi23)),
+    ]
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 pub struct V3 {
     /// x components.
@@ -662,7 +680,7 @@ impl Inertia4 {
     }
 }
 
-/// A symmetric 6×6 spatial inertia per lane, in blocks ([`Sym6`]).
+/// A symmetric 6×6 spatial inertia per lane, in blocks ([`crate::spatial::Sym6`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Sym6x4 {
     /// Linear–linear block.
@@ -674,22 +692,6 @@ pub struct Sym6x4 {
 }
 
 impl Sym6x4 {
-    /// The four lanes.
-    #[inline(always)]
-    pub fn lanes(&self) -> [Sym6; 4] {
-        let (m, h, i) = (self.m.lanes(), self.h.lanes(), self.i.lanes());
-        // written out rather than `[0, 1, 2, 3].map(..)`: `array::map` is a
-        // generic call the compiler may leave out of line (it did, when
-        // unrelated code moved the crate's codegen units: +540 instructions
-        // per one-robot step in `aba_passes`, +300 in memcpy)
-        let lane = |k: usize| Sym6 {
-            m: m[k],
-            h: h[k],
-            i: i[k],
-        };
-        [lane(0), lane(1), lane(2), lane(3)]
-    }
-
     /// `self + o`, block by block.
     #[inline]
     #[target_feature(enable = "avx")]
@@ -701,7 +703,7 @@ impl Sym6x4 {
         }
     }
 
-    /// [`Sym6::mul_motion`].
+    /// [`crate::spatial::Sym6::mul_motion`].
     #[inline]
     #[target_feature(enable = "avx")]
     pub fn mul_motion(&self, v: Motion4) -> Force4 {
