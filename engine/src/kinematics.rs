@@ -73,6 +73,8 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let n = model.nbodies;
     let base = base_pose(model, q);
     data.origin = base.trans;
+    // (set again by the legs in lanes when they fill it)
+    data.lanes.valid = false;
     let origin = base.trans;
     data.pose[0] = base;
     if model.joint_type[0] == JointType::Free {

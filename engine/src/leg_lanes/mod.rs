@@ -25,11 +25,45 @@ mod x4;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use avx::{
-    GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, poses_legs, reserve_workspace,
-    rnea_passes_legs,
+    GroupKinematics, GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, poses_legs,
+    reserve_workspace, rnea_passes_legs,
 };
 
 use crate::model::{JointType, Model};
+
+/// The legs' motion subspaces, reference inertias and velocities as
+/// [`poses_legs`] computed them, in its lanes (one entry per group), beside
+/// the per-body arrays it scatters them into: ABA and RNEA in lanes read them
+/// here instead of gathering them back from those arrays.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LaneKinematics {
+    /// The entries hold what the per-body arrays `s`, `inertia_ref` and `vel`
+    /// of the same [`crate::Data`] hold for the legs: set by a forward
+    /// kinematics with velocities and inertias in lanes, cleared by every
+    /// other write of those arrays (kinematics without lanes or velocities,
+    /// [`crate::Data::invalidate_kinematics`]).
+    pub(crate) valid: bool,
+    /// One per group of the model's [`LegLanes`] (none in a kinematics-only
+    /// `Data` or without lanes).
+    #[cfg(target_arch = "x86_64")]
+    pub(crate) groups: Vec<GroupKinematics>,
+}
+
+impl LaneKinematics {
+    /// Room for `model`'s groups when `dynamics` (ABA and RNEA can run on
+    /// the `Data`) and the legs run in lanes; empty otherwise.
+    pub(crate) fn new(model: &Model, dynamics: bool) -> LaneKinematics {
+        let _ = (model, dynamics);
+        LaneKinematics {
+            valid: false,
+            #[cfg(target_arch = "x86_64")]
+            groups: match &model.leg_lanes {
+                Some(plan) if dynamics => vec![GroupKinematics::default(); plan.groups.len()],
+                _ => Vec::new(),
+            },
+        }
+    }
+}
 
 /// [`crate::trig::sin_cos_x4`] on AVX: four sines and cosines in one register.
 #[cfg(target_arch = "x86_64")]
