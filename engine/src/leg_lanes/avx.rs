@@ -200,7 +200,8 @@ pub(crate) fn leg_end_points(
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
 /// velocities of every leg body, in the per-body arrays; with velocities and
 /// inertias, the groups' subspaces, inertias and velocities also stay in
-/// `data`'s lane cache, for ABA and RNEA in lanes.
+/// `data`'s lane cache, for ABA and RNEA in lanes, with the bodies' terms of
+/// the CoM and its velocity (`com::com_and_velocity`).
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -218,9 +219,11 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let mut inertia_ref = with_inertia.then(|| &mut data.inertia_ref[..n]);
     // The lane cache, when this call fills every entry it holds.
     let ng = plan.groups.len();
-    let cache = &mut data.lanes.groups;
-    let fill = with_inertia && v.is_some() && cache.len() == ng;
-    let cache = &mut cache[..if fill { ng } else { 0 }];
+    let lanes = &mut data.lanes;
+    let fill =
+        with_inertia && v.is_some() && lanes.groups.len() == ng && lanes.com_terms.len() == n;
+    let cache = &mut lanes.groups[..if fill { ng } else { 0 }];
+    let com_terms = &mut lanes.com_terms[..if fill { n } else { 0 }];
     for (g, (grp, st)) in plan.groups.iter().zip(&plan.steps).enumerate() {
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
@@ -256,6 +259,16 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
                 vel[bodies[k]] = vs[k];
             }
             if fill {
+                let ri = cache[g].inertia;
+                let mc = ri.com.scale(ri.mass);
+                let p = vel_g.lin.add(vel_g.ang.cross(ri.com)).scale(ri.mass);
+                // each body's [mc, m] and [p, 0] as one vector each
+                let a = F4::transpose([mc.x, mc.y, mc.z, ri.mass]);
+                let b = F4::transpose([p.x, p.y, p.z, F4::default()]);
+                for k in 0..LEGS {
+                    let (a, b) = (a[k].to_array(), b[k].to_array());
+                    com_terms[bodies[k]] = [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]];
+                }
                 cache[g].vel = vel_g;
             }
             vp = vel_g;

@@ -13,7 +13,8 @@ use crate::spatial::{Force, Motion, Sym6, Transform};
 use core::arch::x86_64::{
     __m256d, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _CMP_NLT_UQ,
     _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
-    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_set1_pd, _mm256_sub_pd, _mm256_xor_pd,
+    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_permute2f128_pd, _mm256_set1_pd,
+    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd,
 };
 use glam::{DMat3, DVec3};
 
@@ -39,6 +40,23 @@ impl F4 {
     #[inline(always)]
     pub fn to_array(self) -> [f64; 4] {
         bytemuck::cast(self.0)
+    }
+
+    /// The 4×4 transpose of the rows `r`: lane `k` of result `j` is lane
+    /// `j` of `r[k]` (eight shuffles; moves only, the same bits).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub fn transpose(r: [F4; 4]) -> [F4; 4] {
+        let t0 = _mm256_unpacklo_pd(r[0].0, r[1].0);
+        let t1 = _mm256_unpackhi_pd(r[0].0, r[1].0);
+        let t2 = _mm256_unpacklo_pd(r[2].0, r[3].0);
+        let t3 = _mm256_unpackhi_pd(r[2].0, r[3].0);
+        [
+            F4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
+            F4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
+            F4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
+            F4(_mm256_permute2f128_pd::<0x31>(t1, t3)),
+        ]
     }
 
     /// The same value in every lane.
