@@ -234,10 +234,10 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             pose[i] = xs[k];
             s_all[i] = ss[k];
         }
-        // (a kinematics-only `Data` has no reference inertias)
         if fill {
             cache[g].s = s;
         }
+        // (a kinematics-only `Data` has no reference inertias)
         if let Some(ir) = inertia_ref.as_deref_mut() {
             let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
             if fill {
