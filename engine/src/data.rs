@@ -60,6 +60,9 @@ pub struct Data {
     /// the same state (observation, then the integrator's first stage) is
     /// skipped: see [`crate::kinematics::forward_kinematics`].
     pub(crate) kin: KinematicsKey,
+    /// The legs' `s`, `inertia_ref` and `vel` in lanes, for ABA and RNEA in
+    /// lanes (see [`crate::leg_lanes`]).
+    pub(crate) lanes: crate::leg_lanes::LaneKinematics,
 }
 
 /// The state the kinematic fields of a [`Data`] hold: the model's address,
@@ -128,6 +131,7 @@ impl Data {
                 v: vec![0.0; nv],
                 level: 0,
             },
+            lanes: crate::leg_lanes::LaneKinematics::new(model, dynamics),
         }
     }
 
@@ -173,7 +177,7 @@ impl Data {
                 Data::for_kinematics(model)
             })
         });
-        data.kin.level = 0;
+        data.invalidate_kinematics();
         let result = f(&mut data);
         pool.with(|cell| {
             let mut spares = cell.borrow_mut();
@@ -205,6 +209,7 @@ impl Data {
     /// Forgets which state the kinematic fields hold (after writing them by hand).
     pub fn invalidate_kinematics(&mut self) {
         self.kin.level = 0;
+        self.lanes.valid = false;
     }
 
     /// Clears every external force.

@@ -73,6 +73,8 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let n = model.nbodies;
     let base = base_pose(model, q);
     data.origin = base.trans;
+    // (set again by the legs in lanes when they fill it)
+    data.lanes.valid = false;
     let origin = base.trans;
     data.pose[0] = base;
     if model.joint_type[0] == JointType::Free {
@@ -242,7 +244,9 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
     match kinematics_level(model, data, q, Some(v)) {
         2 => return,
         1 => {
-            // poses are valid for q: velocities only
+            // poses are valid for q: velocities only (the lanes' copies of
+            // the legs' velocities, not updated here, are then stale)
+            data.lanes.valid = false;
             data.vel[0] = base_velocity(model, data, v);
             for i in 1..model.nbodies {
                 data.vel[i] = data.vel[model.parent[i]] + data.s[i] * v[model.idx_v[i]];

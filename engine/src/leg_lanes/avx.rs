@@ -61,11 +61,24 @@ impl GroupStep {
     }
 }
 
-/// One group's motion subspaces, inertias and velocities (reference frame)
-/// in lanes, gathered from the per-body arrays that forward kinematics
-/// filled (kept nowhere else: ABA in lanes gathers them per call).
+/// One group's motion subspace, reference inertia and velocity as
+/// [`poses_legs`] computed them in lanes (kept in [`Data`]'s lane cache).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct GroupKinematics {
+    s: Motion4,
+    inertia: Inertia4,
+    vel: Motion4,
+}
+
+/// Group `g`'s (bodies `grp`) motion subspaces, inertias and velocities
+/// (reference frame) in lanes: from `data`'s lane cache when it holds them,
+/// else gathered from the per-body arrays that forward kinematics filled.
 #[inline(always)]
-fn group_kinematics(grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+    if data.lanes.valid {
+        let k = &data.lanes.groups[g];
+        return (k.s, k.inertia, k.vel);
+    }
     // element by element from the four bodies, no copies of whole structs
     let [a, b, c, d] = *grp;
     let v3 = |p: [&DVec3; LEGS]| {
@@ -185,7 +198,10 @@ pub(crate) fn leg_end_points(
 /// The legs' part of forward kinematics (`kinematics::poses`), after the
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
-/// velocities of every leg body, in the per-body arrays.
+/// velocities of every leg body, in the per-body arrays; with velocities and
+/// inertias, the groups' subspaces, inertias and velocities also stay in
+/// `data`'s lane cache, for ABA and RNEA in lanes, with the bodies' terms of
+/// the CoM and its velocity (`com::com_and_velocity`).
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -201,7 +217,14 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let s_all = &mut data.s[..n];
     let vel = &mut data.vel[..n];
     let mut inertia_ref = with_inertia.then(|| &mut data.inertia_ref[..n]);
-    for (grp, st) in plan.groups.iter().zip(&plan.steps) {
+    // The lane cache, when this call fills every entry it holds.
+    let ng = plan.groups.len();
+    let lanes = &mut data.lanes;
+    let fill =
+        with_inertia && v.is_some() && lanes.groups.len() == ng && lanes.com_terms.len() == n;
+    let cache = &mut lanes.groups[..if fill { ng } else { 0 }];
+    let com_terms = &mut lanes.com_terms[..if fill { n } else { 0 }];
+    for (g, (grp, st)) in plan.groups.iter().zip(&plan.steps).enumerate() {
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
         let (x, r, s) = group_pose!(st, &xp, origin, q);
@@ -211,9 +234,15 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             pose[i] = xs[k];
             s_all[i] = ss[k];
         }
+        if fill {
+            cache[g].s = s;
+        }
         // (a kinematics-only `Data` has no reference inertias)
         if let Some(ir) = inertia_ref.as_deref_mut() {
             let inertia = st.inertia.transformed(&Transform4::new(x.rot, r));
+            if fill {
+                cache[g].inertia = inertia;
+            }
             let (mass, com, ic) = (
                 inertia.mass.to_array(),
                 inertia.com.lanes(),
@@ -229,10 +258,24 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             for k in 0..LEGS {
                 vel[bodies[k]] = vs[k];
             }
+            if fill {
+                let ri = cache[g].inertia;
+                let mc = ri.com.scale(ri.mass);
+                let p = vel_g.lin.add(vel_g.ang.cross(ri.com)).scale(ri.mass);
+                // each body's [mc, m] and [p, 0] as one vector each
+                let a = F4::transpose([mc.x, mc.y, mc.z, ri.mass]);
+                let b = F4::transpose([p.x, p.y, p.z, F4::default()]);
+                for k in 0..LEGS {
+                    let (a, b) = (a[k].to_array(), b[k].to_array());
+                    com_terms[bodies[k]] = [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]];
+                }
+                cache[g].vel = vel_g;
+            }
             vp = vel_g;
         }
         xp = x;
     }
+    data.lanes.valid = fill;
 }
 
 /// ABA's pass 1 for the base (`aba::aba_passes`): its rigid inertia and
@@ -287,7 +330,7 @@ pub(crate) fn aba_passes_legs(
     for g in (0..ng).rev() {
         let grp = &groups[g];
         let st = &plan.steps[g];
-        let (s, inertia, vi) = group_kinematics(grp, data);
+        let (s, inertia, vi) = group_kinematics(g, grp, data);
         let mut ia = inertia.to_sym6();
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
@@ -464,7 +507,7 @@ pub(crate) fn rnea_passes_legs(
     // Pass 1, hips to feet: acc = acc_p + S q̈ + v × S q̇, f = I acc + v ×* I v.
     let mut a_parent = Motion4::splat(data.acc[0]);
     for (g, (grp, st)) in groups.iter().zip(&plan.steps).enumerate() {
-        let (s, inertia, vi) = group_kinematics(grp, data);
+        let (s, inertia, vi) = group_kinematics(g, grp, data);
         let acc = a_parent
             .add(s.scale(gather(a, &st.idx_v)))
             .add(vi.cross(s.scale(gather(v, &st.idx_v))));

@@ -42,6 +42,23 @@ impl F4 {
         bytemuck::cast(self.0)
     }
 
+    /// The 4×4 transpose of the rows `r`: lane `k` of result `j` is lane
+    /// `j` of `r[k]` (eight shuffles; moves only, the same bits).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub fn transpose(r: [F4; 4]) -> [F4; 4] {
+        let t0 = _mm256_unpacklo_pd(r[0].0, r[1].0);
+        let t1 = _mm256_unpackhi_pd(r[0].0, r[1].0);
+        let t2 = _mm256_unpacklo_pd(r[2].0, r[3].0);
+        let t3 = _mm256_unpackhi_pd(r[2].0, r[3].0);
+        [
+            F4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
+            F4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
+            F4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
+            F4(_mm256_permute2f128_pd::<0x31>(t1, t3)),
+        ]
+    }
+
     /// The same value in every lane.
     #[inline]
     #[target_feature(enable = "avx")]
