@@ -5,7 +5,7 @@
 use super::LEGS;
 use super::LegLanes;
 use super::x4::{
-    F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis, transpose4,
+    F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis,
 };
 use crate::data::Data;
 use crate::model::{JointType, Model};
@@ -464,7 +464,7 @@ fn add_hips_into_base(ia0: &mut Sym6, pa0: &mut Force, term: &Sym6x4, pa: &Force
         bl.x, bl.y, bl.z, ba.x, ba.y, ba.z, 0.0, 0.0, 0.0,
     ];
     for (b, t) in base.chunks_exact_mut(LEGS).zip(lanes.chunks_exact(LEGS)) {
-        let by_lane = transpose4([t[0], t[1], t[2], t[3]]);
+        let by_lane = F4::transpose([t[0], t[1], t[2], t[3]]);
         let mut sum = F4::from_array([b[0], b[1], b[2], b[3]]);
         for k in (0..LEGS).rev() {
             sum = sum.add(by_lane[k]);

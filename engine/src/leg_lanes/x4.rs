@@ -226,23 +226,6 @@ impl F4 {
 }
 
 /// A 3-vector per lane (glam's `DVec3`).
-/// The 4×4 transpose: lane `k` of entry `j` of the result is lane `j` of
-/// entry `k` of `r` (eight shuffles, no arithmetic).
-#[inline]
-#[target_feature(enable = "avx")]
-pub fn transpose4(r: [F4; 4]) -> [F4; 4] {
-    let lo01 = _mm256_unpacklo_pd(r[0].0, r[1].0); // a0 b0 a2 b2
-    let hi01 = _mm256_unpackhi_pd(r[0].0, r[1].0); // a1 b1 a3 b3
-    let lo23 = _mm256_unpacklo_pd(r[2].0, r[3].0); // c0 d0 c2 d2
-    let hi23 = _mm256_unpackhi_pd(r[2].0, r[3].0); // c1 d1 c3 d3
-    [
-        F4(_mm256_permute2f128_pd::<0x20>(lo01, lo23)),
-        F4(_mm256_permute2f128_pd::<0x20>(hi01, hi23)),
-        F4(_mm256_permute2f128_pd::<0x31>(lo01, lo23)),
-        F4(_mm256_permute2f128_pd::<0x31>(hi01, hi23)),
-    ]
-}
-
 #[derive(Clone, Copy, Debug, Default)]
 pub struct V3 {
     /// x components.
