@@ -51,9 +51,7 @@ pub fn com_velocity(model: &Model, data: &Data) -> DVec3 {
 
 /// [`center_of_mass`] and [`com_velocity`] in one pass over the bodies (each
 /// sum in the same order, so the same bits), for a caller that reads both
-/// every step. With the legs in lanes and their lane cache valid, the leg
-/// bodies' terms are forward kinematics' (computed four at a time there);
-/// only the sums run here, body by body.
+/// every step.
 pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
     let n = model.nbodies;
     let mut mc = DVec3::ZERO;
@@ -61,42 +59,16 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
     // `center_of_mass` sums the masses from 0.0, `com_velocity` from −0.0:
     // the same value after the first mass, and both only divide by a positive one
     let mut m = 0.0;
-    if let Some(terms) = leg_terms(model, data) {
-        let (ri, v) = (&data.inertia_ref[0], data.vel[0]);
+    for (ri, v) in data.inertia_ref[..n].iter().zip(&data.vel[..n]) {
         mc += ri.com * ri.mass;
         m += ri.mass;
         p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
-        // [mc, m, p, 0]: each body's eight terms added at once, lane by lane
-        // the scalar sums' additions
-        let mut acc = [mc.x, mc.y, mc.z, m, p.x, p.y, p.z, 0.0];
-        for t in &terms[1..n] {
-            for (a, t) in acc.iter_mut().zip(t) {
-                *a += t;
-            }
-        }
-        mc = DVec3::new(acc[0], acc[1], acc[2]);
-        m = acc[3];
-        p = DVec3::new(acc[4], acc[5], acc[6]);
-    } else {
-        for (ri, v) in data.inertia_ref[..n].iter().zip(&data.vel[..n]) {
-            mc += ri.com * ri.mass;
-            m += ri.mass;
-            p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
-        }
     }
     if m > 0.0 {
         (data.origin + mc / m, p / m)
     } else {
         (data.origin, DVec3::ZERO)
     }
-}
-
-/// Each body's terms of [`com_and_velocity`]'s sums (the base's unused),
-/// when `data`'s lane cache holds its kinematics for `model`'s legs in lanes.
-fn leg_terms<'d>(model: &Model, data: &'d Data) -> Option<&'d [[f64; 8]]> {
-    let plan = model.leg_lanes.as_ref();
-    let terms = &data.lanes.com_terms;
-    (plan.is_some() && data.lanes.valid && terms.len() == model.nbodies).then_some(&terms[..])
 }
 
 /// Linear momentum `Σ mᵢ (vᵢ + ωᵢ × cᵢ)` (kg·m/s, world): the linear part of

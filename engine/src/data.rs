@@ -60,7 +60,7 @@ pub struct Data {
     /// the same state (observation, then the integrator's first stage) is
     /// skipped: see [`crate::kinematics::forward_kinematics`].
     pub(crate) kin: KinematicsKey,
-    /// The legs' `s`, `inertia_ref` and `vel` in lanes, for ABA and RNEA in
+    /// The legs' `s` and `inertia_ref` in lanes, for ABA and RNEA in
     /// lanes (see [`crate::leg_lanes`]).
     pub(crate) lanes: crate::leg_lanes::LaneKinematics,
 }

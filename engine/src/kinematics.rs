@@ -244,9 +244,8 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
     match kinematics_level(model, data, q, Some(v)) {
         2 => return,
         1 => {
-            // poses are valid for q: velocities only (the lanes' copies of
-            // the legs' velocities, not updated here, are then stale)
-            data.lanes.valid = false;
+            // poses are valid for q: velocities only (the lane cache holds
+            // no velocities, so its subspaces and inertias stay valid)
             data.vel[0] = base_velocity(model, data, v);
             for i in 1..model.nbodies {
                 data.vel[i] = data.vel[model.parent[i]] + data.s[i] * v[model.idx_v[i]];

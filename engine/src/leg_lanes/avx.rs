@@ -61,13 +61,14 @@ impl GroupStep {
     }
 }
 
-/// One group's motion subspace, reference inertia and velocity as
-/// [`poses_legs`] computed them in lanes (kept in [`Data`]'s lane cache).
+/// One group's motion subspace and reference inertia as [`poses_legs`]
+/// computed them in lanes (kept in [`Data`]'s lane cache). Not the
+/// velocities: those are gathered from `data.vel`, which keeps the cache
+/// within the memory budget per robot (768 bytes fewer for quad16).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct GroupKinematics {
     s: Motion4,
     inertia: Inertia4,
-    vel: Motion4,
 }
 
 /// Group `g`'s (bodies `grp`) motion subspaces, inertias and velocities
@@ -75,10 +76,6 @@ pub(crate) struct GroupKinematics {
 /// else gathered from the per-body arrays that forward kinematics filled.
 #[inline(always)]
 fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
-    if data.lanes.valid {
-        let k = &data.lanes.groups[g];
-        return (k.s, k.inertia, k.vel);
-    }
     // element by element from the four bodies, no copies of whole structs
     let [a, b, c, d] = *grp;
     let v3 = |p: [&DVec3; LEGS]| {
@@ -95,6 +92,10 @@ fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Ine
             v3([&ma.ang, &mb.ang, &mc.ang, &md.ang]),
         )
     };
+    if data.lanes.valid {
+        let k = &data.lanes.groups[g];
+        return (k.s, k.inertia, motion(&data.vel));
+    }
     let ir = &data.inertia_ref;
     let (ia, ib, ic, id) = (&ir[a], &ir[b], &ir[c], &ir[d]);
     let (ja, jb, jc, jd) = (
@@ -200,8 +201,7 @@ pub(crate) fn leg_end_points(
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
 /// velocities of every leg body, in the per-body arrays; with velocities and
 /// inertias, the groups' subspaces, inertias and velocities also stay in
-/// `data`'s lane cache, for ABA and RNEA in lanes, with the bodies' terms of
-/// the CoM and its velocity (`com::com_and_velocity`).
+/// `data`'s lane cache, for ABA and RNEA in lanes.
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -219,11 +219,9 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let mut inertia_ref = with_inertia.then(|| &mut data.inertia_ref[..n]);
     // The lane cache, when this call fills every entry it holds.
     let ng = plan.groups.len();
-    let lanes = &mut data.lanes;
-    let fill =
-        with_inertia && v.is_some() && lanes.groups.len() == ng && lanes.com_terms.len() == n;
-    let cache = &mut lanes.groups[..if fill { ng } else { 0 }];
-    let com_terms = &mut lanes.com_terms[..if fill { n } else { 0 }];
+    let cache = &mut data.lanes.groups;
+    let fill = with_inertia && v.is_some() && cache.len() == ng;
+    let cache = &mut cache[..if fill { ng } else { 0 }];
     for (g, (grp, st)) in plan.groups.iter().zip(&plan.steps).enumerate() {
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
@@ -257,19 +255,6 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             let vs = vel_g.lanes();
             for k in 0..LEGS {
                 vel[bodies[k]] = vs[k];
-            }
-            if fill {
-                let ri = cache[g].inertia;
-                let mc = ri.com.scale(ri.mass);
-                let p = vel_g.lin.add(vel_g.ang.cross(ri.com)).scale(ri.mass);
-                // each body's [mc, m] and [p, 0] as one vector each
-                let a = F4::transpose([mc.x, mc.y, mc.z, ri.mass]);
-                let b = F4::transpose([p.x, p.y, p.z, F4::default()]);
-                for k in 0..LEGS {
-                    let (a, b) = (a[k].to_array(), b[k].to_array());
-                    com_terms[bodies[k]] = [a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3]];
-                }
-                cache[g].vel = vel_g;
             }
             vp = vel_g;
         }

@@ -31,30 +31,23 @@ pub(crate) use avx::{
 
 use crate::model::{JointType, Model};
 
-/// The legs' motion subspaces, reference inertias and velocities as
+/// The legs' motion subspaces and reference inertias as
 /// [`poses_legs`] computed them, in its lanes (one entry per group), beside
 /// the per-body arrays it scatters them into: ABA and RNEA in lanes read them
-/// here instead of gathering them back from those arrays.
+/// here instead of gathering them back from those arrays (the velocities
+/// they still gather from `vel`: 768 bytes per quad16 fewer).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LaneKinematics {
-    /// The entries hold what the per-body arrays `s`, `inertia_ref` and `vel`
-    /// of the same [`crate::Data`] hold for the legs: set by a forward
+    /// The entries hold what the per-body arrays `s` and `inertia_ref` of
+    /// the same [`crate::Data`] hold for the legs: set by a forward
     /// kinematics with velocities and inertias in lanes, cleared by every
-    /// other write of those arrays (kinematics without lanes or velocities,
-    /// [`crate::Data::invalidate_kinematics`]).
+    /// other write of the poses (kinematics without lanes, velocities or
+    /// inertias, [`crate::Data::invalidate_kinematics`]).
     pub(crate) valid: bool,
     /// One per group of the model's [`LegLanes`] (none in a kinematics-only
     /// `Data` or without lanes).
     #[cfg(target_arch = "x86_64")]
     pub(crate) groups: Vec<GroupKinematics>,
-    /// Per body, its terms of [`crate::com::com_and_velocity`]'s sums: the
-    /// mass times the centre of mass (x, y, z), the mass, the mass times the
-    /// centre of mass's velocity (x, y, z), and a zero, each the scalar
-    /// formula's product (the same bits), computed in the lanes. One array
-    /// per body, in body order: the sums, which run body by body, add one
-    /// body's eight numbers at a time. nbodies entries when `groups` has
-    /// any (the base's unused), else none.
-    pub(crate) com_terms: Vec<[f64; 8]>,
 }
 
 impl LaneKinematics {
@@ -67,12 +60,6 @@ impl LaneKinematics {
             #[cfg(target_arch = "x86_64")]
             groups: match &model.leg_lanes {
                 Some(plan) if dynamics => vec![GroupKinematics::default(); plan.groups.len()],
-                _ => Vec::new(),
-            },
-            com_terms: match &model.leg_lanes {
-                Some(plan) if dynamics && cfg!(target_arch = "x86_64") => {
-                    vec![[0.0; 8]; model.nbodies]
-                }
                 _ => Vec::new(),
             },
         }
@@ -482,33 +469,6 @@ mod tests {
             outs.push(d.ddq.clone());
         }
         assert_eq!(bits(&outs[0]), bits(&outs[1]));
-    }
-
-    /// The CoM and its velocity from the lanes' terms are the general
-    /// path's bits, after a full kinematics and after a velocity-only one
-    /// (which leaves the lanes stale: the general sums run then).
-    #[test]
-    fn com_from_the_lanes_matches_the_general_path() {
-        let (fast, general) = fast_and_general("quad16", BaseKind::Floating);
-        let mut q = fast.neutral_q();
-        for (k, x) in q[fast.base_nq()..].iter_mut().enumerate() {
-            *x = 0.15 * k as f64 - 1.1;
-        }
-        let v0: Vec<f64> = (0..fast.nv).map(|k| 0.07 * k as f64 - 0.5).collect();
-        let v1 = vec![0.4; fast.nv];
-        let com = |m: &Model, v1: Option<&[f64]>| {
-            let mut d = Data::new(m);
-            forward_kinematics(m, &mut d, &q, &v0);
-            if let Some(v1) = v1 {
-                forward_kinematics(m, &mut d, &q, v1);
-            }
-            assert_eq!(d.lanes.valid, v1.is_none() && super::runs_on(m));
-            let (c, vc) = crate::com::com_and_velocity(m, &d);
-            bits(&[c.to_array(), vc.to_array()].concat())
-        };
-        for v in [None, Some(&v1[..])] {
-            assert_eq!(com(&fast, v), com(&general, v));
-        }
     }
 
     /// A kinematics-only `Data` (no reference inertias) gets the same poses, subspaces and velocities as a full
