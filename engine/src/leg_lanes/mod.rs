@@ -172,6 +172,27 @@ mod tests {
         x.iter().map(|e| e.to_bits()).collect()
     }
 
+    /// A random floating-base pose in `q[..7]`: position within ±5 m
+    /// (height 0–1 m), any orientation up to ±3 rad about a random axis.
+    fn random_base_pose(r: &mut ChaCha8Rng, q: &mut [f64]) {
+        let axis = DVec3::new(
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+            r.random_range(-1.0..1.0),
+        )
+        .normalize();
+        let quat = DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
+        q[..7].copy_from_slice(&[
+            r.random_range(-5.0..5.0),
+            r.random_range(-5.0..5.0),
+            r.random_range(0.0..1.0),
+            quat.x,
+            quat.y,
+            quat.z,
+            quat.w,
+        ]);
+    }
+
     /// The built-in `name` on `base` (legs in lanes where its shape allows)
     /// and the same model on the general path (`leg_lanes = None`).
     fn fast_and_general(name: &str, base: BaseKind) -> (Model, Model) {
@@ -211,22 +232,7 @@ mod tests {
                 let mut q = fast.neutral_q();
                 let nb = fast.base_nq();
                 if fast.is_floating() {
-                    let axis = DVec3::new(
-                        r.random_range(-1.0..1.0),
-                        r.random_range(-1.0..1.0),
-                        r.random_range(-1.0..1.0),
-                    )
-                    .normalize();
-                    let quat = DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
-                    q[..7].copy_from_slice(&[
-                        r.random_range(-5.0..5.0),
-                        r.random_range(-5.0..5.0),
-                        r.random_range(0.0..1.0),
-                        quat.x,
-                        quat.y,
-                        quat.z,
-                        quat.w,
-                    ]);
+                    random_base_pose(&mut r, &mut q);
                 }
                 for x in &mut q[nb..] {
                     *x = r.random_range(-3.0..3.0);
@@ -318,22 +324,7 @@ mod tests {
                 let nb = fast.base_nq();
                 let mut v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
                 if fast.is_floating() && trial % 2 == 0 {
-                    let axis = DVec3::new(
-                        r.random_range(-1.0..1.0),
-                        r.random_range(-1.0..1.0),
-                        r.random_range(-1.0..1.0),
-                    )
-                    .normalize();
-                    let quat = DQuat::from_axis_angle(axis, r.random_range(-3.0..3.0));
-                    q[..7].copy_from_slice(&[
-                        r.random_range(-5.0..5.0),
-                        r.random_range(-5.0..5.0),
-                        r.random_range(0.0..1.0),
-                        quat.x,
-                        quat.y,
-                        quat.z,
-                        quat.w,
-                    ]);
+                    random_base_pose(&mut r, &mut q);
                 } else if fast.is_floating() {
                     // the estimator's case: the base at the origin, at rest
                     v[..6].fill(0.0);
