@@ -3,6 +3,7 @@
 //! `scenarios/README.md` ("Metrics"); the doc of each [`MetricsSummary`] field
 //! repeats it in short.
 
+use crate::sensors::noise::round_half_away;
 use crate::spatial::yaw_from_rot;
 use crate::support::stability_margin;
 use glam::{DMat3, DVec2, DVec3};
@@ -381,18 +382,6 @@ impl PitchRange {
     }
 }
 
-/// `x.round()`, without the library call for |x| < 0.5 (a yaw step of less
-/// than half a turn, every step but a wrap): the rounding of such an `x` is
-/// the zero of its sign, which `0.0.copysign(x)` is, bit for bit.
-#[inline]
-fn round_turns(x: f64) -> f64 {
-    if x.abs() < 0.5 {
-        0.0f64.copysign(x)
-    } else {
-        x.round()
-    }
-}
-
 impl MetricsAccumulator {
     /// Starts accumulating. `heading_yaw_rad` sets the forward direction
     /// (world yaw of the robot at the start); samples before `window_start_s`
@@ -455,7 +444,8 @@ impl MetricsAccumulator {
             self.yaw_unwrapped = yaw;
         } else {
             let mut d = yaw - self.yaw_prev;
-            d -= round_turns(d / std::f64::consts::TAU) * std::f64::consts::TAU;
+            // `round` without its library call (the same bits)
+            d -= round_half_away(d / std::f64::consts::TAU) * std::f64::consts::TAU;
             self.yaw_unwrapped += d;
             self.yaw_prev = yaw;
         }
@@ -814,30 +804,6 @@ mod tests {
             (lo, hi) = (lo.min(e), hi.max(e));
             assert_eq!(roll.range.range(), [lo.x, hi.x], "roll at {k}");
             assert_eq!(pitch.range.range(), [lo.y, hi.y], "pitch at {k}");
-        }
-    }
-
-    /// `round_turns` is `round`, bit for bit, on both sides of ±0.5 and at ±0.
-    #[test]
-    fn round_turns_is_round() {
-        for x in [
-            0.0,
-            -0.0,
-            0.25,
-            -0.25,
-            0.49999999999999994,
-            -0.49999999999999994,
-            0.5,
-            -0.5,
-            0.75,
-            -1.5,
-            1e-300,
-            -1e-300,
-            3.2,
-            f64::NAN,
-            f64::INFINITY,
-        ] {
-            assert_eq!(round_turns(x).to_bits(), x.round().to_bits(), "{x}");
         }
     }
 }

@@ -205,17 +205,9 @@ pub(crate) fn planar(v: DVec3) -> DVec2 {
 #[inline]
 pub fn wrap_angle(a: f64) -> f64 {
     use std::f64::consts::{PI, TAU};
-    let turns = a / TAU;
-    // `round` is a library call on the baseline x86-64 target (about 25
-    // instructions, three to four per leg IK); within half a turn, where
-    // the IK's angles are, it is the zero of `turns`' sign, and that is
-    // what this gives without the call: the same bits for every input.
-    let n = if turns.abs() < 0.5 {
-        0.0f64.copysign(turns)
-    } else {
-        turns.round()
-    };
-    let w = a - TAU * n;
+    // `round` without its library call on the baseline x86-64 target
+    // (three to four per leg IK): the same bits for every input
+    let w = a - TAU * crate::sensors::noise::round_half_away(a / TAU);
     if w <= -PI { w + TAU } else { w }
 }
 
@@ -270,8 +262,11 @@ pub(crate) fn two_link(
     two_link_links(&Link::new(wa), &Link::new(ub), target, bend_sign, clamp)
 }
 
-/// [`two_link`] with the links' lengths and arguments given.
-#[inline]
+/// [`two_link`] with the links' lengths and arguments given. Always inlined:
+/// the leg IK's hot path, which the compiler's heuristic left out of line
+/// once `wrap_angle`'s rounding became a call it inlines (+76 instructions
+/// a robot-step).
+#[inline(always)]
 pub(crate) fn two_link_links(
     a: &Link,
     b: &Link,

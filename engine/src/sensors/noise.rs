@@ -82,11 +82,16 @@ const TWO_52: f64 = 4_503_599_627_370_496.0;
 /// library call (a generic x86-64 build has no rounding instruction; the
 /// call cost ~50 instructions per sample). `(|x| + 2⁵²) − 2⁵²` rounds
 /// `|x| < 2⁵²` to nearest, ties to even, exactly; the difference to `|x|`
-/// is exact too, and a tie that went down is moved up.
+/// is exact too, and a tie that went down is moved up. Below one half (an
+/// angle's turns within half a turn, the usual case of
+/// [`crate::legs::wrap_angle`] and the metrics' yaw unwrap) the answer is
+/// the zero of `x`'s sign, without the sums.
 #[inline]
 pub fn round_half_away(x: f64) -> f64 {
     let a = x.abs();
-    if a < TWO_52 {
+    if a < 0.5 {
+        0.0f64.copysign(x)
+    } else if a < TWO_52 {
         let r = (a + TWO_52) - TWO_52;
         let r = if r - a == -0.5 { r + 1.0 } else { r };
         r.copysign(x)
