@@ -132,6 +132,17 @@ struct GroupAba {
     c: Motion4,
 }
 
+/// Panics unless the four joint indices are below `nv`: one branch instead
+/// of a bounds check per gather or store at those indices.
+#[inline(always)]
+fn assert_joints_within(idx: &[usize; LEGS], nv: usize) {
+    let [j0, j1, j2, j3] = *idx;
+    assert!(
+        (j0 < nv) & (j1 < nv) & (j2 < nv) & (j3 < nv),
+        "leg joints within nv"
+    );
+}
+
 #[inline(always)]
 fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
     F4::from_array([x[idx[0]], x[idx[1]], x[idx[2]], x[idx[3]]])
@@ -200,8 +211,8 @@ pub(crate) fn leg_end_points(
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
 /// velocities of every leg body, in the per-body arrays; with velocities and
-/// inertias, the groups' subspaces, inertias and velocities also stay in
-/// `data`'s lane cache, for ABA and RNEA in lanes.
+/// inertias, the groups' subspaces and inertias also stay in `data`'s lane
+/// cache, for ABA and RNEA in lanes.
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -322,11 +333,7 @@ pub(crate) fn aba_passes_legs(
             pai = pai.sub(Force4::from_lanes(grp.map(|i| f_ext[i])));
         }
         // one check for the gathers of v, armature and tau below
-        let [j0, j1, j2, j3] = st.idx_v;
-        assert!(
-            (j0 < nv) & (j1 < nv) & (j2 < nv) & (j3 < nv),
-            "leg joints within nv"
-        );
+        assert_joints_within(&st.idx_v, nv);
         let c = vi.cross(s.scale(gather(v, &st.idx_v)));
         if let Some((cia, cpa)) = child {
             ia = ia.add(cia);
@@ -391,11 +398,7 @@ pub(crate) fn aba_passes_legs(
             .mul(w.d_inv);
         let a_i = a.add(w.s.scale(qdd));
         let qdds = qdd.to_array();
-        let [j0, j1, j2, j3] = st.idx_v;
-        assert!(
-            (j0 < nv) & (j1 < nv) & (j2 < nv) & (j3 < nv),
-            "leg joints within nv"
-        );
+        assert_joints_within(&st.idx_v, nv);
         for k in 0..LEGS {
             ddq[st.idx_v[k]] = qdds[k];
         }
