@@ -172,6 +172,16 @@ pub fn validate(
     if all_valid(params, feet, wrench) {
         return Ok(());
     }
+    first_error(params, feet, wrench)
+}
+
+/// [`validate`]'s checks one by one, each with its error: the first that
+/// fails (`Ok` if none does).
+fn first_error(
+    params: &ForceQpParams,
+    feet: &[StanceFoot],
+    wrench: &Force,
+) -> Result<(), ForceQpError> {
     let param = |field, value, why| Err(ForceQpError::Param { field, value, why });
     if let Some(&w) = params
         .wrench_weight
@@ -227,9 +237,10 @@ pub fn validate(
     Ok(())
 }
 
-/// Whether [`validate`] finds nothing wrong: every one of its checks, as one
-/// branch-free conjunction (it runs before every solve; the checks one by
-/// one, each with its error, only when one fails).
+/// Whether [`validate`] finds nothing wrong: every check of [`first_error`],
+/// as one branch-free conjunction (it runs before every solve; the checks
+/// one by one, each with its error, only when one fails). A unit test keeps
+/// the two in step.
 fn all_valid(params: &ForceQpParams, feet: &[StanceFoot], wrench: &Force) -> bool {
     // `x.is_finite() && x >= 0.0`
     let finite_nonneg = |x: f64| (0.0..=f64::MAX).contains(&x);
@@ -577,5 +588,80 @@ pub fn stance_torques(
     }
     for (t, lim) in tau_joints.iter_mut().zip(&model.effort_limit[b..]) {
         *t = t.clamp(-lim, *lim);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`all_valid`] answers as [`first_error`] does, on valid inputs and
+    /// with each field in turn set to a boundary or an invalid value: a check
+    /// added to one but not the other fails here.
+    #[test]
+    fn all_valid_is_first_error_ok() {
+        let params = ForceQpParams::default();
+        let foot = |x: f64| StanceFoot {
+            position_m: DVec3::new(x, 0.1, -0.4),
+            normal: DVec3::Z,
+            friction: 0.6,
+            load: 1.0,
+        };
+        let feet = [foot(0.3), foot(-0.3), foot(0.2), foot(-0.2)];
+        let wrench = Force::new(DVec3::new(0.0, 0.0, 270.0), DVec3::ZERO);
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            0.5,
+            -1e-300,
+            -1.0,
+            1.5,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut cases = vec![(params, feet.to_vec(), wrench)];
+        for &x in &values {
+            for k in 0..6 {
+                let mut p = params;
+                p.wrench_weight[k] = x;
+                cases.push((p, feet.to_vec(), wrench));
+            }
+            for set in [
+                |p: &mut ForceQpParams, x| p.regularization = x,
+                |p: &mut ForceQpParams, x| p.min_normal_force_n = x,
+                |p: &mut ForceQpParams, x| p.max_normal_force_n = x,
+            ] {
+                let mut p = params;
+                set(&mut p, x);
+                cases.push((p, feet.to_vec(), wrench));
+            }
+            for set in [
+                |f: &mut StanceFoot, x| f.position_m.y = x,
+                |f: &mut StanceFoot, x| f.normal = DVec3::new(0.0, 0.0, x),
+                |f: &mut StanceFoot, x| f.friction = x,
+                |f: &mut StanceFoot, x| f.load = x,
+            ] {
+                let mut f = feet.to_vec();
+                set(&mut f[2], x);
+                cases.push((params, f, wrench));
+            }
+            let mut w = wrench;
+            w.ang.x = x;
+            cases.push((params, feet.to_vec(), w));
+        }
+        let mut five = feet.to_vec();
+        five.push(foot(0.0));
+        cases.push((params, five, wrench));
+        let mut failing = 0;
+        for (p, f, w) in &cases {
+            let ok = first_error(p, f, w).is_ok();
+            assert_eq!(all_valid(p, f, w), ok, "{p:?} {f:?} {w:?}");
+            failing += usize::from(!ok);
+        }
+        // the cases reach both answers, most of them errors
+        assert!(failing > cases.len() / 2, "{failing} of {}", cases.len());
     }
 }
