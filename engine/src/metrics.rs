@@ -213,35 +213,28 @@ impl Hulls {
     }
 }
 
+/// A time integral and the range of a sampled value.
 #[derive(Clone, Copy, Debug)]
 struct Stat {
     sum: f64,
-    min: f64,
-    max: f64,
+    range: Range,
 }
 
 impl Stat {
     const EMPTY: Stat = Stat {
         sum: 0.0,
-        min: f64::INFINITY,
-        max: f64::NEG_INFINITY,
+        range: Range::EMPTY,
     };
     fn add(&mut self, x: f64, w: f64) {
         self.sum += x * w;
-        self.min = self.min.min(x);
-        self.max = self.max.max(x);
+        self.range.add(x);
     }
     fn p2p(&self) -> f64 {
-        if self.min.is_finite() {
-            self.max - self.min
-        } else {
-            0.0
-        }
+        self.range.p2p()
     }
 }
 
-/// Smallest and largest value, as [`Stat`]'s (an angle's range needs no
-/// time integral).
+/// Smallest and largest value (an angle's range needs no time integral).
 #[derive(Clone, Copy, Debug)]
 struct Range {
     min: f64,
