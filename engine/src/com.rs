@@ -10,7 +10,7 @@ pub fn center_of_mass(model: &Model, data: &Data) -> DVec3 {
     let mut mc = DVec3::ZERO;
     let mut m = 0.0;
     for i in 0..model.nbodies {
-        let ri = &data.inertia_ref[i];
+        let ri = &data.body_inertia(model, i);
         mc += ri.com * ri.mass;
         m += ri.mass;
     }
@@ -26,7 +26,7 @@ pub fn center_of_mass(model: &Model, data: &Data) -> DVec3 {
 pub fn spatial_momentum(model: &Model, data: &Data) -> Force {
     let mut h = Force::ZERO;
     for i in 0..model.nbodies {
-        h += data.inertia_ref[i].mul_motion(data.vel[i]);
+        h += data.body_inertia(model, i).mul_motion(data.vel[i]);
     }
     h
 }
@@ -41,7 +41,9 @@ pub fn momentum_about_com(model: &Model, data: &Data) -> (DVec3, DVec3) {
 
 /// Velocity of the centre of mass (m/s, world). Needs kinematics with velocities.
 pub fn com_velocity(model: &Model, data: &Data) -> DVec3 {
-    let m: f64 = (0..model.nbodies).map(|i| data.inertia_ref[i].mass).sum();
+    let m: f64 = (0..model.nbodies)
+        .map(|i| data.body_inertia(model, i).mass)
+        .sum();
     if m > 0.0 {
         linear_momentum(model, data) / m
     } else {
@@ -59,11 +61,13 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
     // `center_of_mass` sums the masses from 0.0, `com_velocity` from −0.0:
     // the same value after the first mass, and both only divide by a positive one
     let mut m = 0.0;
-    for (ri, v) in data.inertia_ref[..n].iter().zip(&data.vel[..n]) {
+    let vel = &data.vel[..n];
+    data.for_each_body_inertia(model, |i, ri| {
+        let v = &vel[i];
         mc += ri.com * ri.mass;
         m += ri.mass;
         p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
-    }
+    });
     if m > 0.0 {
         (data.origin + mc / m, p / m)
     } else {
@@ -77,7 +81,7 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
 pub fn linear_momentum(model: &Model, data: &Data) -> DVec3 {
     let mut p = DVec3::ZERO;
     for i in 0..model.nbodies {
-        let (inertia, v) = (&data.inertia_ref[i], data.vel[i]);
+        let (inertia, v) = (&data.body_inertia(model, i), data.vel[i]);
         p += (v.lin + v.ang.cross(inertia.com)) * inertia.mass;
     }
     p

@@ -68,7 +68,7 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) -> MassMatrix {
     let mut w = BodyScratch::take(model.nbodies);
     let ia = &mut w.ia;
     for i in 0..model.nbodies {
-        ia[i] = data.inertia_ref[i].to_sym6();
+        ia[i] = data.body_inertia(model, i).to_sym6();
     }
     for i in (1..model.nbodies).rev() {
         let ic = ia[i];

@@ -7,7 +7,7 @@ use crate::model::Model;
 pub fn kinetic_energy(model: &Model, data: &Data, v: &[f64]) -> f64 {
     let mut t = 0.0;
     for i in 0..model.nbodies {
-        t += data.inertia_ref[i].kinetic_energy(data.vel[i]);
+        t += data.body_inertia(model, i).kinetic_energy(data.vel[i]);
     }
     for (k, a) in model.armature.iter().enumerate() {
         t += 0.5 * a * v[k] * v[k];
@@ -19,7 +19,9 @@ pub fn kinetic_energy(model: &Model, data: &Data, v: &[f64]) -> f64 {
 /// (Pinocchio's convention: `+m·9.81·z_com` for standard gravity).
 pub fn potential_energy(model: &Model, data: &Data) -> f64 {
     let c = crate::com::center_of_mass(model, data);
-    let m: f64 = (0..model.nbodies).map(|i| data.inertia_ref[i].mass).sum();
+    let m: f64 = (0..model.nbodies)
+        .map(|i| data.body_inertia(model, i).mass)
+        .sum();
     -m * model.gravity.dot(c)
 }
 

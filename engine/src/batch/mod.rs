@@ -213,7 +213,7 @@ impl<const L: usize> BatchData<L> {
         };
         self.origin.set_lane(lane, data.origin);
         for i in 0..model.nbodies {
-            let (p, ri) = (&data.pose[i], &data.inertia_ref[i]);
+            let (p, ri) = (&data.pose[i], &data.body_inertia(model, i));
             set_mat(&mut self.pose[i].rot, p.rot);
             self.pose[i].trans.set_lane(lane, p.trans);
             self.vel[i].set_lane(lane, data.vel[i]);
@@ -263,6 +263,8 @@ impl<const L: usize> BatchData<L> {
                 data.s_base[k + 3] = Motion::new(DVec3::ZERO, r.col(k));
             }
         }
+        // the per-body arrays hold every body now, the legs' lane cache an older state
+        data.lanes.valid = false;
         let key = &mut data.kin;
         key.model = model as *const Model as usize;
         key.q.clear();

@@ -71,6 +71,14 @@ pub(crate) struct GroupKinematics {
     inertia: Inertia4,
 }
 
+impl GroupKinematics {
+    /// Lane `k`'s reference inertia.
+    #[inline(always)]
+    pub(crate) fn inertia_lane(&self, k: usize) -> RigidInertia {
+        self.inertia.lane(k)
+    }
+}
+
 /// Group `g`'s (bodies `grp`) motion subspaces, inertias and velocities
 /// (reference frame) in lanes: from `data`'s lane cache when it holds them,
 /// else gathered from the per-body arrays that forward kinematics filled.
@@ -233,6 +241,10 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let cache = &mut data.lanes.groups;
     let fill = with_inertia && v.is_some() && cache.len() == ng;
     let cache = &mut cache[..if fill { ng } else { 0 }];
+    // The legs' inertias in the lanes only when every reader on this CPU
+    // reads them there (`Data::body_inertia`, ABA and RNEA in lanes; RNEA
+    // takes the general path beyond its group limit).
+    let lanes_only = fill && ng <= RNEA_MAX_GROUPS;
     for (g, (grp, st)) in plan.groups.iter().zip(&plan.steps).enumerate() {
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
@@ -252,13 +264,15 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             if fill {
                 cache[g].inertia = inertia;
             }
-            let (mass, com, ic) = (
-                inertia.mass.to_array(),
-                inertia.com.lanes(),
-                inertia.inertia_com.lanes(),
-            );
-            for k in 0..LEGS {
-                ir[bodies[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
+            if !lanes_only {
+                let (mass, com, ic) = (
+                    inertia.mass.to_array(),
+                    inertia.com.lanes(),
+                    inertia.inertia_com.lanes(),
+                );
+                for k in 0..LEGS {
+                    ir[bodies[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
+                }
             }
         }
         if let Some(v) = v {

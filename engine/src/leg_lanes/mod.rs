@@ -38,8 +38,10 @@ use crate::model::{JointType, Model};
 /// they still gather from `vel`: 768 bytes per quad16 fewer).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LaneKinematics {
-    /// The entries hold what the per-body arrays `s` and `inertia_ref` of
-    /// the same [`crate::Data`] hold for the legs: set by a forward
+    /// The entries hold the legs' subspaces, which the per-body array `s`
+    /// of the same [`crate::Data`] also holds, and their inertias, which
+    /// `inertia_ref` then does not (read through
+    /// [`crate::Data::body_inertia`]): set by a forward
     /// kinematics with velocities and inertias in lanes, cleared by every
     /// other write of the poses (kinematics without lanes, velocities or
     /// inertias, [`crate::Data::invalidate_kinematics`]).
@@ -88,6 +90,12 @@ pub struct LegLanes {
     /// Per group: the joints' placements, axis and the bodies' inertias in lanes.
     #[cfg(target_arch = "x86_64")]
     pub(crate) steps: Vec<GroupStep>,
+    /// Per body: its group and lane (`usize::MAX` for the base), for reading
+    /// one body's entry of the lane cache.
+    pub(crate) slot: Vec<(usize, usize)>,
+    /// Whether each leg's bodies are consecutive: body `1 + k·G + g` is
+    /// group `g`'s lane `k` (`G` groups).
+    pub(crate) leg_major: bool,
 }
 
 /// Whether ABA runs `m`'s four legs in lanes on this CPU: `m` has their
@@ -150,10 +158,20 @@ impl LegLanes {
         }
         // Each body of group g − 1 is then the parent of exactly one body of
         // group g (the same lane), so every chain is unbranched.
+        let mut slot = vec![(usize::MAX, usize::MAX); n];
+        for (g, grp) in groups.iter().enumerate() {
+            for (k, &i) in grp.iter().enumerate() {
+                slot[i] = (g, k);
+            }
+        }
+        let ng = groups.len();
+        let leg_major = (1..n).all(|i| slot[i] == ((i - 1) % ng, (i - 1) / ng));
         Some(LegLanes {
             #[cfg(target_arch = "x86_64")]
             steps: groups.iter().map(|grp| GroupStep::of(m, grp)).collect(),
             groups,
+            slot,
+            leg_major,
         })
     }
 }
@@ -257,7 +275,7 @@ mod tests {
                         all.extend(d.vel[i].to_array());
                         all.extend(d.s[i].to_array());
                         all.extend(d.acc[i].to_array());
-                        let ri = d.inertia_ref[i];
+                        let ri = d.body_inertia(m, i);
                         all.push(ri.mass);
                         all.extend(ri.com.to_array());
                         all.extend(ri.inertia_com.to_cols_array());

@@ -9,7 +9,7 @@
 //! are `#[target_feature(enable = "avx")]`: safe to call from code compiled
 //! for AVX (the x86-64-v3 clones of the dispatched passes), and only from there.
 
-use crate::spatial::{Force, Motion, Transform};
+use crate::spatial::{Force, Motion, RigidInertia, Transform};
 use core::arch::x86_64::{
     __m256d, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _CMP_NLT_UQ,
     _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
@@ -40,6 +40,13 @@ impl F4 {
     #[inline(always)]
     pub fn to_array(self) -> [f64; 4] {
         bytemuck::cast(self.0)
+    }
+
+    /// Lane `k`, loaded from where `self` is stored (`to_array()[k]`
+    /// would copy the whole vector through the stack for a run-time `k`).
+    #[inline(always)]
+    pub fn lane(&self, k: usize) -> f64 {
+        bytemuck::cast_ref::<__m256d, [f64; 4]>(&self.0)[k]
     }
 
     /// The 4×4 transpose of the rows `r`: lane `k` of result `j` is lane
@@ -630,6 +637,19 @@ pub struct Inertia4 {
 }
 
 impl Inertia4 {
+    /// Lane `k`, element by element from memory (no AVX needed; after
+    /// inlining, only the elements the caller uses are loaded).
+    #[inline(always)]
+    pub fn lane(&self, k: usize) -> RigidInertia {
+        let v = |v: &V3| DVec3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
+        let i = &self.inertia_com;
+        RigidInertia::new(
+            self.mass.lane(k),
+            v(&self.com),
+            DMat3::from_cols(v(&i.x_axis), v(&i.y_axis), v(&i.z_axis)),
+        )
+    }
+
     /// [`crate::spatial::RigidInertia::transformed`], each lane through its transform.
     #[inline]
     #[target_feature(enable = "avx")]
