@@ -77,8 +77,9 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) -> MassMatrix {
     let mm = &mut out.0;
     for i in (1..model.nbodies).rev() {
         let iv = model.idx_v[i];
-        let f = ia[i].mul_motion(data.s[i]);
-        mm[iv * nv + iv] = data.s[i].dot(f) + model.armature[iv];
+        let si = data.subspace(model, i);
+        let f = ia[i].mul_motion(si);
+        mm[iv * nv + iv] = si.dot(f) + model.armature[iv];
         let mut j = model.parent[i];
         while j != NO_PARENT {
             match model.joint_type[j] {
@@ -92,7 +93,7 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) -> MassMatrix {
                 JointType::Anchored => {}
                 _ => {
                     let jv = model.idx_v[j];
-                    let x = data.s[j].dot(f);
+                    let x = data.subspace(model, j).dot(f);
                     mm[iv * nv + jv] = x;
                     mm[jv * nv + iv] = x;
                 }

@@ -23,8 +23,11 @@ pub struct Data {
     pub pose: Vec<Transform>,
     /// Spatial velocity of each body, reference frame (nbodies).
     pub vel: Vec<Motion>,
-    /// Motion subspace column of each 1-DOF body, reference frame (nbodies; base unused).
-    pub s: Vec<Motion>,
+    /// Motion subspace column of each 1-DOF body, reference frame (nbodies;
+    /// base unused). Read through [`Data::subspace`]: while the legs' lane
+    /// cache is valid, the legs' entries here are stale (forward kinematics
+    /// in lanes keeps them only in the lanes, saving the scatter).
+    pub(crate) s: Vec<Motion>,
     /// Motion subspace of the free base, reference frame: columns for `v[0..6]`.
     pub s_base: [Motion; 6],
     /// Each body's rigid inertia in the reference frame (CoM relative to `origin`)
@@ -226,6 +229,23 @@ impl Data {
             return self.lanes.groups[g].inertia_lane(k);
         }
         self.inertia_ref[i]
+    }
+
+    /// Body `i`'s motion subspace column (reference frame; `i` not the
+    /// base), after [`crate::kinematics::forward_kinematics`] on `model`. The
+    /// legs' come from the lane cache when forward kinematics left them
+    /// there only (see `s`).
+    #[inline(always)]
+    pub fn subspace(&self, model: &Model, i: usize) -> Motion {
+        #[cfg(target_arch = "x86_64")]
+        if self.lanes.valid
+            && let Some(plan) = &model.leg_lanes
+            && let Some(&(g, k)) = plan.slot.get(i)
+            && g != usize::MAX
+        {
+            return self.lanes.groups[g].s_lane(k);
+        }
+        self.s[i]
     }
 
     /// `f(i, inertia)` for every body `i` in increasing order, with

@@ -30,7 +30,7 @@ pub fn point_jacobian<'d>(
             }
             JointType::Anchored => {}
             _ => {
-                let c = data.s[j].point_velocity(r);
+                let c = data.subspace(model, j).point_velocity(r);
                 set_col(&mut data.jacobian, nv, model.idx_v[j], c);
             }
         }
@@ -66,7 +66,7 @@ pub fn add_point_force_jt(
                 }
             }
             JointType::Anchored => {}
-            _ => tau[model.idx_v[j]] += data.s[j].point_velocity(r).dot(force_n),
+            _ => tau[model.idx_v[j]] += data.subspace(model, j).point_velocity(r).dot(force_n),
         }
         j = model.parent[j];
     }

@@ -248,7 +248,8 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
             // no velocities, so its subspaces and inertias stay valid)
             data.vel[0] = base_velocity(model, data, v);
             for i in 1..model.nbodies {
-                data.vel[i] = data.vel[model.parent[i]] + data.s[i] * v[model.idx_v[i]];
+                data.vel[i] =
+                    data.vel[model.parent[i]] + data.subspace(model, i) * v[model.idx_v[i]];
             }
         }
         _ => {

@@ -217,7 +217,7 @@ impl<const L: usize> BatchData<L> {
             set_mat(&mut self.pose[i].rot, p.rot);
             self.pose[i].trans.set_lane(lane, p.trans);
             self.vel[i].set_lane(lane, data.vel[i]);
-            self.s[i].set_lane(lane, data.s[i]);
+            self.s[i].set_lane(lane, data.subspace(model, i));
             let li = &mut self.inertia_ref[i];
             li.mass.0[lane] = ri.mass;
             li.com.set_lane(lane, ri.com);

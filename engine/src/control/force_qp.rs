@@ -580,7 +580,7 @@ pub fn stance_torques(
         let mut j = body;
         while j != NO_PARENT {
             if !matches!(model.joint_type[j], JointType::Free | JointType::Anchored) {
-                let c = data.s[j].point_velocity(r);
+                let c = data.subspace(model, j).point_velocity(r);
                 tau_joints[model.idx_v[j] - b] -= c.x * f.x + c.y * f.y + c.z * f.z;
             }
             j = model.parent[j];

@@ -72,6 +72,12 @@ pub(crate) struct GroupKinematics {
 }
 
 impl GroupKinematics {
+    /// Lane `k`'s motion subspace.
+    #[inline(always)]
+    pub(crate) fn s_lane(&self, k: usize) -> Motion {
+        self.s.lane(k)
+    }
+
     /// Lane `k`'s reference inertia.
     #[inline(always)]
     pub(crate) fn inertia_lane(&self, k: usize) -> RigidInertia {
@@ -218,9 +224,13 @@ pub(crate) fn leg_end_points(
 /// The legs' part of forward kinematics (`kinematics::poses`), after the
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
-/// velocities of every leg body, in the per-body arrays; with velocities and
-/// inertias, the groups' subspaces and inertias also stay in `data`'s lane
-/// cache, for ABA and RNEA in lanes.
+/// velocities of every leg body. Poses and velocities go to the per-body
+/// arrays. With velocities and inertias, the groups' subspaces and inertias
+/// stay in `data`'s lane cache, for ABA and RNEA in lanes, and (when RNEA
+/// takes its lanes too) only there: `Data::subspace` and
+/// `Data::body_inertia` read them back, and the scatter into `s` and
+/// `inertia_ref` (about 250 instructions per call for quad16) is saved.
+/// Otherwise they go to the per-body arrays.
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -249,11 +259,15 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
         let (x, r, s) = group_pose!(st, &xp, origin, q);
-        let (xs, ss) = (x.lanes(), s.lanes());
+        let xs = x.lanes();
         for k in 0..LEGS {
-            let i = bodies[k];
-            pose[i] = xs[k];
-            s_all[i] = ss[k];
+            pose[bodies[k]] = xs[k];
+        }
+        if !lanes_only {
+            let ss = s.lanes();
+            for k in 0..LEGS {
+                s_all[bodies[k]] = ss[k];
+            }
         }
         if fill {
             cache[g].s = s;

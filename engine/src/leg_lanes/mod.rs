@@ -32,15 +32,16 @@ pub(crate) use avx::{
 use crate::model::{JointType, Model};
 
 /// The legs' motion subspaces and reference inertias as
-/// [`poses_legs`] computed them, in its lanes (one entry per group), beside
-/// the per-body arrays it scatters them into: ABA and RNEA in lanes read them
-/// here instead of gathering them back from those arrays (the velocities
-/// they still gather from `vel`: 768 bytes per quad16 fewer).
+/// [`poses_legs`] computed them, in its lanes (one entry per group), instead
+/// of in the per-body arrays: ABA and RNEA in lanes read them here without
+/// gathering, and the few per-body readers through [`crate::Data::subspace`]
+/// and [`crate::Data::body_inertia`] (the velocities are in `vel` only:
+/// 768 bytes per quad16 fewer).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LaneKinematics {
-    /// The entries hold the legs' subspaces, which the per-body array `s`
-    /// of the same [`crate::Data`] also holds, and their inertias, which
-    /// `inertia_ref` then does not (read through
+    /// The entries hold the legs' subspaces and inertias, which the
+    /// per-body arrays `s` and `inertia_ref` of the same [`crate::Data`]
+    /// then need not hold (read through [`crate::Data::subspace`] and
     /// [`crate::Data::body_inertia`]): set by a forward
     /// kinematics with velocities and inertias in lanes, cleared by every
     /// other write of the poses (kinematics without lanes, velocities or
@@ -273,7 +274,7 @@ mod tests {
                         all.extend(d.pose[i].rot.to_cols_array());
                         all.extend(d.pose[i].trans.to_array());
                         all.extend(d.vel[i].to_array());
-                        all.extend(d.s[i].to_array());
+                        all.extend(d.subspace(m, i).to_array());
                         all.extend(d.acc[i].to_array());
                         let ri = d.body_inertia(m, i);
                         all.push(ri.mass);
@@ -504,7 +505,7 @@ mod tests {
                 all.extend(d.pose[i].rot.to_cols_array());
                 all.extend(d.pose[i].trans.to_array());
                 all.extend(d.vel[i].to_array());
-                all.extend(d.s[i].to_array());
+                all.extend(d.subspace(m, i).to_array());
             }
             bits(&all)
         };

@@ -513,6 +513,13 @@ macro_rules! spatial_ops {
                 Self::new(V3::splat(m.lin), V3::splat(m.ang))
             }
 
+            /// Lane `k`, element by element from memory (no AVX needed).
+            #[inline(always)]
+            pub fn lane(&self, k: usize) -> $scalar {
+                let v = |v: &V3| DVec3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
+                $scalar::new(v(&self.lin), v(&self.ang))
+            }
+
             /// One value per lane.
             #[inline(always)]
             pub fn from_lanes(f: [$scalar; 4]) -> Self {
