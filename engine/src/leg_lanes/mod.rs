@@ -93,9 +93,11 @@ pub struct LegLanes {
     pub(crate) steps: Vec<GroupStep>,
     /// Per body: its group and lane (`usize::MAX` for the base), for reading
     /// one body's entry of the lane cache.
+    #[cfg(target_arch = "x86_64")]
     pub(crate) slot: Vec<(usize, usize)>,
     /// Whether each leg's bodies are consecutive: body `1 + k·G + g` is
     /// group `g`'s lane `k` (`G` groups).
+    #[cfg(target_arch = "x86_64")]
     pub(crate) leg_major: bool,
 }
 
@@ -167,11 +169,15 @@ impl LegLanes {
         }
         let ng = groups.len();
         let leg_major = (1..n).all(|i| slot[i] == ((i - 1) % ng, (i - 1) / ng));
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = leg_major;
         Some(LegLanes {
             #[cfg(target_arch = "x86_64")]
             steps: groups.iter().map(|grp| GroupStep::of(m, grp)).collect(),
             groups,
+            #[cfg(target_arch = "x86_64")]
             slot,
+            #[cfg(target_arch = "x86_64")]
             leg_major,
         })
     }
