@@ -302,6 +302,26 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     data.lanes.valid = fill;
 }
 
+/// The forces `f[i]` of the bodies `grp` in lanes, element by element:
+/// `Force4::from_lanes` on copies of the four forces went through the stack
+/// and back with shuffles (about 70 instructions a group, now 30).
+#[inline(always)]
+fn gather_forces(f: &[Force], grp: &[usize; LEGS]) -> Force4 {
+    let [a, b, c, d] = *grp;
+    let (fa, fb, fc, fd) = (&f[a], &f[b], &f[c], &f[d]);
+    let v3 = |p: [&DVec3; LEGS]| {
+        V3::new(
+            F4::from_array([p[0].x, p[1].x, p[2].x, p[3].x]),
+            F4::from_array([p[0].y, p[1].y, p[2].y, p[3].y]),
+            F4::from_array([p[0].z, p[1].z, p[2].z, p[3].z]),
+        )
+    };
+    Force4::new(
+        v3([&fa.lin, &fb.lin, &fc.lin, &fd.lin]),
+        v3([&fa.ang, &fb.ang, &fc.ang, &fd.ang]),
+    )
+}
+
 /// ABA's pass 1 for the base (`aba::aba_passes`): its rigid inertia and
 /// bias force, minus the external force if any. Scalar code kept out of the
 /// AVX function: there LLVM packs it with VEX `vmovq` register moves, which
@@ -358,7 +378,7 @@ pub(crate) fn aba_passes_legs(
         let mut ia = inertia.to_sym6();
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
-            pai = pai.sub(Force4::from_lanes(grp.map(|i| f_ext[i])));
+            pai = pai.sub(gather_forces(f_ext, grp));
         }
         // one check for the gathers of v, armature and tau below
         assert_joints_within(&st.idx_v, nv);
