@@ -468,9 +468,13 @@ fn size<const N: usize>(runtime: usize) -> usize {
 /// `Σ_{j<n} c_ij x_j` for constraint row `i` of `qp`: the bits of
 /// `dot(&qp.c[i][..n], &x[..n])`. Under [`DenseQp::foot_blocks`] the sum runs
 /// over the row's three columns, and over all `n` only when that gives
-/// zero: before its first nonzero partial sum a sum is a (signed) zero and
+/// `−0`: before its first nonzero partial sum a sum is a (signed) zero and
 /// after it a zero product changes it in no bit, so a nonzero three-term
-/// sum is the full one (finite `x`).
+/// sum is the full one (finite `x`). A `+0` three-term sum is the full one
+/// too: it had a `+0` term or a nonzero partial sum that cancelled (exactly
+/// `+0`), and from `+0` a sum of zeros stays `+0`; only `−0` (all three
+/// terms `−0`) depends on the other columns' zeros' signs. (`x` starts as
+/// `J`'s upper triangle, so most rows' three columns are zero at first.)
 #[inline(always)]
 fn row_dot(qp: &DenseQp, i: usize, n: usize, x: &[f64; MAX_VARS]) -> f64 {
     if qp.foot_blocks {
@@ -478,7 +482,7 @@ fn row_dot(qp: &DenseQp, i: usize, n: usize, x: &[f64; MAX_VARS]) -> f64 {
         if lo + 3 <= n {
             let (c, y) = (&qp.c[i], x);
             let s = -0.0 + c[lo] * y[lo] + c[lo + 1] * y[lo + 1] + c[lo + 2] * y[lo + 2];
-            if s != 0.0 {
+            if s.to_bits() != (-0.0f64).to_bits() {
                 return s;
             }
         }
@@ -616,6 +620,43 @@ mod tests {
             solved > 500 && iterations > 5 * solved,
             "{solved} solved, {iterations} iterations"
         );
+    }
+
+    /// `row_dot` over a foot's block gives `dot`'s bits on rows and vectors
+    /// full of signed zeros (the cases where the three-term sum is zero:
+    /// all `−0`, a `+0` term, a cancellation), other columns' zeros of
+    /// either sign.
+    #[test]
+    fn row_dot_keeps_the_signs_of_zeros() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let pick = |rng: &mut rand_chacha::ChaCha8Rng| {
+            [0.0, -0.0, 1.0, -1.0, 0.5][rng.random_range(0..5usize)]
+        };
+        for trial in 0..20_000 {
+            let k = 1 + trial % 4;
+            let n = 3 * k;
+            let mut qp = DenseQp {
+                n,
+                m: 6 * k,
+                foot_blocks: true,
+                ..DenseQp::default()
+            };
+            let i = rng.random_range(0..6 * k);
+            let lo = 3 * (i / 6);
+            for c in 0..n {
+                qp.c[i][c] = if (lo..lo + 3).contains(&c) {
+                    pick(&mut rng)
+                } else if rng.random_bool(0.5) {
+                    -0.0
+                } else {
+                    0.0
+                };
+            }
+            let x: [f64; MAX_VARS] = std::array::from_fn(|_| pick(&mut rng));
+            let (got, want) = (row_dot(&qp, i, n, &x), dot(&qp.c[i][..n], &x[..n]));
+            assert_eq!(got.to_bits(), want.to_bits(), "trial {trial}");
+        }
     }
 
     #[test]
