@@ -21,6 +21,9 @@ pub const MAX_VARS: usize = 12;
 /// Most inequality constraints a problem may have.
 pub const MAX_CONSTRAINTS: usize = 24;
 
+/// Feet (blocks of three variables) of a [`DenseQp::foot_blocks`] problem.
+const FOOT_LANES: usize = MAX_VARS / 3;
+
 /// Why a solve failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum ActiveSetError {
@@ -103,6 +106,12 @@ pub struct ActiveSet {
     blocked: [bool; MAX_CONSTRAINTS],
     /// Solution.
     x: [f64; MAX_VARS],
+    /// Under [`DenseQp::foot_blocks`] with six rows per block of three
+    /// variables (the stance-force QP): `foot_rows[j][c][a] = C[6a + j][3a + c]`,
+    /// each foot's rows in a SIMD lane (zero past the last foot), filled at
+    /// the start of a solve; step 1 then evaluates all constraints a row of
+    /// every foot at a time.
+    foot_rows: [[[f64; FOOT_LANES]; 3]; 6],
     /// Active-set size.
     iq: usize,
     /// Iterations of the last solve (constraint additions and drops).
@@ -119,6 +128,7 @@ impl Default for ActiveSet {
             u: [0.0; MAX_VARS + 1],
             blocked: [false; MAX_CONSTRAINTS],
             x: [0.0; MAX_VARS],
+            foot_rows: [[[0.0; FOOT_LANES]; 3]; 6],
             iq: 0,
             iterations: 0,
         }
@@ -176,6 +186,10 @@ impl ActiveSet {
         }
         self.iq = 0;
         self.blocked[..m].fill(false);
+        let feet = qp.foot_blocks && n.is_multiple_of(3) && m == 2 * n;
+        if feet {
+            self.fill_foot_rows(qp, n / 3);
+        }
         let mut r_norm = 1.0f64;
         let max_iter = 20 * (n + m);
         let (mut d, mut rr) = ([0.0; MAX_VARS], [0.0; MAX_VARS + 1]);
@@ -184,12 +198,33 @@ impl ActiveSet {
             // those that may be added).
             let mut worst = -qp.tolerance;
             let mut candidate = None;
-            for i in 0..m {
-                if !self.blocked[i] {
-                    let s = row_dot(qp, i, n, &self.x) - qp.b[i];
-                    if s < worst {
-                        worst = s;
-                        candidate = Some(i);
+            if feet {
+                let sums = self.foot_row_dots(n / 3);
+                for a in 0..n / 3 {
+                    for (j, s) in sums.iter().enumerate() {
+                        let i = 6 * a + j;
+                        if !self.blocked[i] {
+                            // `row_dot`'s three-term sum; its other columns only for −0
+                            let s = if s[a].to_bits() == (-0.0f64).to_bits() {
+                                row_dot(qp, i, n, &self.x)
+                            } else {
+                                s[a]
+                            } - qp.b[i];
+                            if s < worst {
+                                worst = s;
+                                candidate = Some(i);
+                            }
+                        }
+                    }
+                }
+            } else {
+                for i in 0..m {
+                    if !self.blocked[i] {
+                        let s = row_dot(qp, i, n, &self.x) - qp.b[i];
+                        if s < worst {
+                            worst = s;
+                            candidate = Some(i);
+                        }
                     }
                 }
             }
@@ -278,6 +313,44 @@ impl ActiveSet {
                 s_p = row_dot(qp, p, n, &self.x) - qp.b[p];
             }
         }
+    }
+
+    /// Fills [`Self::foot_rows`] from `qp`'s rows (`feet` blocks).
+    #[inline(always)]
+    fn fill_foot_rows(&mut self, qp: &DenseQp, feet: usize) {
+        for (j, rows) in self.foot_rows.iter_mut().enumerate() {
+            for (c, lanes) in rows.iter_mut().enumerate() {
+                for (a, v) in lanes.iter_mut().enumerate() {
+                    *v = if a < feet {
+                        qp.c[6 * a + j][3 * a + c]
+                    } else {
+                        0.0
+                    };
+                }
+            }
+        }
+    }
+
+    /// `row_dot`'s three-term sums `−0 + Σ_c C[6a+j][3a+c] x[3a+c]` (in `c`
+    /// order) of every row, as `[j][a]`: the same operations, four feet to a
+    /// register.
+    #[inline(always)]
+    fn foot_row_dots(&self, feet: usize) -> [[f64; FOOT_LANES]; 6] {
+        let mut xs = [[0.0; FOOT_LANES]; 3];
+        for a in 0..feet {
+            for (c, lanes) in xs.iter_mut().enumerate() {
+                lanes[a] = self.x[3 * a + c];
+            }
+        }
+        let mut sums = [[-0.0; FOOT_LANES]; 6];
+        for (s, row) in sums.iter_mut().zip(&self.foot_rows) {
+            for (coef, x) in row.iter().zip(&xs) {
+                for a in 0..FOOT_LANES {
+                    s[a] += coef[a] * x[a];
+                }
+            }
+        }
+        sums
     }
 
     /// Cholesky `H = L Lᵀ` and `J = L⁻ᵀ` (upper triangular), a row of `L`
@@ -468,9 +541,13 @@ fn size<const N: usize>(runtime: usize) -> usize {
 /// `Σ_{j<n} c_ij x_j` for constraint row `i` of `qp`: the bits of
 /// `dot(&qp.c[i][..n], &x[..n])`. Under [`DenseQp::foot_blocks`] the sum runs
 /// over the row's three columns, and over all `n` only when that gives
-/// zero: before its first nonzero partial sum a sum is a (signed) zero and
+/// `−0`: before its first nonzero partial sum a sum is a (signed) zero and
 /// after it a zero product changes it in no bit, so a nonzero three-term
-/// sum is the full one (finite `x`).
+/// sum is the full one (finite `x`). A `+0` three-term sum is the full one
+/// too: it had a `+0` term or a nonzero partial sum that cancelled (exactly
+/// `+0`), and from `+0` a sum of zeros stays `+0`; only `−0` (all three
+/// terms `−0`) depends on the other columns' zeros' signs. (`x` starts as
+/// `J`'s upper triangle, so most rows' three columns are zero at first.)
 #[inline(always)]
 fn row_dot(qp: &DenseQp, i: usize, n: usize, x: &[f64; MAX_VARS]) -> f64 {
     if qp.foot_blocks {
@@ -478,7 +555,7 @@ fn row_dot(qp: &DenseQp, i: usize, n: usize, x: &[f64; MAX_VARS]) -> f64 {
         if lo + 3 <= n {
             let (c, y) = (&qp.c[i], x);
             let s = -0.0 + c[lo] * y[lo] + c[lo + 1] * y[lo + 1] + c[lo + 2] * y[lo + 2];
-            if s != 0.0 {
+            if s.to_bits() != (-0.0f64).to_bits() {
                 return s;
             }
         }
@@ -616,6 +693,43 @@ mod tests {
             solved > 500 && iterations > 5 * solved,
             "{solved} solved, {iterations} iterations"
         );
+    }
+
+    /// `row_dot` over a foot's block gives `dot`'s bits on rows and vectors
+    /// full of signed zeros (the cases where the three-term sum is zero:
+    /// all `−0`, a `+0` term, a cancellation), other columns' zeros of
+    /// either sign.
+    #[test]
+    fn row_dot_keeps_the_signs_of_zeros() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let pick = |rng: &mut rand_chacha::ChaCha8Rng| {
+            [0.0, -0.0, 1.0, -1.0, 0.5][rng.random_range(0..5usize)]
+        };
+        for trial in 0..20_000 {
+            let k = 1 + trial % 4;
+            let n = 3 * k;
+            let mut qp = DenseQp {
+                n,
+                m: 6 * k,
+                foot_blocks: true,
+                ..DenseQp::default()
+            };
+            let i = rng.random_range(0..6 * k);
+            let lo = 3 * (i / 6);
+            for c in 0..n {
+                qp.c[i][c] = if (lo..lo + 3).contains(&c) {
+                    pick(&mut rng)
+                } else if rng.random_bool(0.5) {
+                    -0.0
+                } else {
+                    0.0
+                };
+            }
+            let x: [f64; MAX_VARS] = std::array::from_fn(|_| pick(&mut rng));
+            let (got, want) = (row_dot(&qp, i, n, &x), dot(&qp.c[i][..n], &x[..n]));
+            assert_eq!(got.to_bits(), want.to_bits(), "trial {trial}");
+        }
     }
 
     #[test]
