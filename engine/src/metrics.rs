@@ -482,7 +482,10 @@ impl MetricsAccumulator {
             .zip(s.tau_joints)
         {
             let a = tau.abs();
-            *peak = peak.max(a);
+            // `peak.max(a)`, the same bits (the peak is never NaN nor −0:
+            // it starts at +0 and takes absolute values), without `max`'s
+            // NaN fix-up
+            *peak = if a > *peak { a } else { *peak };
             *integral += a * s.dt_s;
         }
         let v_fwd = s.com_velocity_mps.truncate().dot(self.heading);
@@ -493,15 +496,21 @@ impl MetricsAccumulator {
         self.roll.add(&s.base_rotation);
         self.pitch.add(&s.base_rotation);
         self.yaw.add(self.yaw_unwrapped);
+        // the sums in locals, in the same order: written back once, not
+        // stored at every term
         if let Some(qd) = s.q_desired {
+            let mut err_sq = self.err_sq;
             for (d, q) in qd.iter().zip(s.q_joints) {
-                self.err_sq += (d - q) * (d - q);
+                err_sq += (d - q) * (d - q);
             }
+            self.err_sq = err_sq;
             self.err_n += qd.len().min(s.q_joints.len()) as u64;
         }
+        let mut energy = self.energy;
         for (tau, qd) in s.tau_joints.iter().zip(s.qd_joints) {
-            self.energy += (tau * qd).abs() * s.dt_s;
+            energy += (tau * qd).abs() * s.dt_s;
         }
+        self.energy = energy;
         let mut pts = [DVec2::ZERO; MAX_FEET];
         let mut n = 0;
         for f in s.feet.iter().take(MAX_FEET) {
