@@ -82,6 +82,15 @@ pub struct ActuatorSummary {
     pub max_time_share_at_envelope_limit: f64,
 }
 
+/// `peak.max(x)` for a `peak` that is never NaN: `x` when it is larger,
+/// else `peak` (a NaN `x` too), the same bits as [`f64::max`] here (no −0
+/// either: the peaks start at +0 and take non-negative values), in one
+/// instruction instead of `max`'s five (its NaN fix-up).
+#[inline(always)]
+fn max_of_peak(peak: f64, x: f64) -> f64 {
+    if x > peak { x } else { peak }
+}
+
 impl ActuatorStats {
     /// Statistics for joints with these limits (joint order).
     pub fn new(effort_limit: &[f64], velocity_limit: &[f64]) -> Self {
@@ -109,69 +118,76 @@ impl ActuatorStats {
     /// Records one step of `dt_s` with commanded torques `tau_cmd` and joint
     /// speeds `qd` (joint order). Extra or missing entries are ignored.
     pub fn record(&mut self, tau_cmd: &[f64], qd: &[f64], dt_s: f64) {
-        self.time_s += dt_s;
-        // every per-joint list as a slice of one length, so that the loop
-        // indexes without bounds checks
-        let n = self.effort_limit.len().min(tau_cmd.len());
-        let (effort, velocity) = (&self.effort_limit[..n], &self.velocity_limit[..n]);
-        let (peak_torque, peak_demand) = (
-            &mut self.peak_abs_torque[..n],
-            &mut self.peak_abs_demand[..n],
-        );
-        let (at_torque_s, at_speed_s) = (
-            &mut self.at_torque_limit_s[..n],
-            &mut self.at_speed_limit_s[..n],
-        );
-        let (torque_hits, speed_hits) = (&mut self.torque_hits[..n], &mut self.speed_hits[..n]);
-        let tau_cmd = &tau_cmd[..n];
-        // the peaks on their own, and whether any joint is at its torque
-        // limit: an element-wise loop without branches, which vectorises
-        // (the same operations per joint)
-        let mut any_at_torque = false;
-        for (((peak_t, peak_d), tau), lim) in peak_torque
-            .iter_mut()
-            .zip(peak_demand.iter_mut())
-            .zip(tau_cmd)
-            .zip(effort)
-        {
-            let t = tau.abs();
-            *peak_t = peak_t.max(t.min(*lim));
-            *peak_d = peak_d.max(t);
-            any_at_torque |= t >= *lim;
-        }
-        // joints without a speed (a short `qd`) are not at their speed limit
-        let m = n.min(qd.len());
-        let any_at_speed = qd[..m]
-            .iter()
-            .zip(&velocity[..m])
-            .fold(false, |any, (v, lim)| any | (v.abs() >= *lim));
-        // A step with no joint at a limit, after one with none either (the
-        // usual step), changes no time, hit or flag: the loops below run
-        // only when a joint is at a limit now or was in the last step.
-        if any_at_torque || self.any_was_at_torque {
-            let was = &mut self.was_at_torque[..n];
-            for j in 0..n {
-                let at = tau_cmd[j].abs() >= effort[j];
-                if at {
-                    at_torque_s[j] += dt_s;
-                    torque_hits[j] += u64::from(!was[j]);
-                }
-                was[j] = at;
+        // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
+        // fused multiply–add, so the same bits), in a free function:
+        // multiversion takes no `self`
+        #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+        fn body(this: &mut ActuatorStats, tau_cmd: &[f64], qd: &[f64], dt_s: f64) {
+            this.time_s += dt_s;
+            // every per-joint list as a slice of one length, so that the loop
+            // indexes without bounds checks
+            let n = this.effort_limit.len().min(tau_cmd.len());
+            let (effort, velocity) = (&this.effort_limit[..n], &this.velocity_limit[..n]);
+            let (peak_torque, peak_demand) = (
+                &mut this.peak_abs_torque[..n],
+                &mut this.peak_abs_demand[..n],
+            );
+            let (at_torque_s, at_speed_s) = (
+                &mut this.at_torque_limit_s[..n],
+                &mut this.at_speed_limit_s[..n],
+            );
+            let (torque_hits, speed_hits) = (&mut this.torque_hits[..n], &mut this.speed_hits[..n]);
+            let tau_cmd = &tau_cmd[..n];
+            // the peaks on their own, and whether any joint is at its torque
+            // limit: an element-wise loop without branches, which vectorises
+            // (the same operations per joint)
+            let mut any_at_torque = false;
+            for (((peak_t, peak_d), tau), lim) in peak_torque
+                .iter_mut()
+                .zip(peak_demand.iter_mut())
+                .zip(tau_cmd)
+                .zip(effort)
+            {
+                let t = tau.abs();
+                *peak_t = max_of_peak(*peak_t, t.min(*lim));
+                *peak_d = max_of_peak(*peak_d, t);
+                any_at_torque |= t >= *lim;
             }
-            self.any_was_at_torque = self.was_at_torque.contains(&true);
-        }
-        if any_at_speed || self.any_was_at_speed {
-            let was = &mut self.was_at_speed[..n];
-            for j in 0..n {
-                let at = j < m && qd[j].abs() >= velocity[j];
-                if at {
-                    at_speed_s[j] += dt_s;
-                    speed_hits[j] += u64::from(!was[j]);
+            // joints without a speed (a short `qd`) are not at their speed limit
+            let m = n.min(qd.len());
+            let any_at_speed = qd[..m]
+                .iter()
+                .zip(&velocity[..m])
+                .fold(false, |any, (v, lim)| any | (v.abs() >= *lim));
+            // A step with no joint at a limit, after one with none either (the
+            // usual step), changes no time, hit or flag: the loops below run
+            // only when a joint is at a limit now or was in the last step.
+            if any_at_torque || this.any_was_at_torque {
+                let was = &mut this.was_at_torque[..n];
+                for j in 0..n {
+                    let at = tau_cmd[j].abs() >= effort[j];
+                    if at {
+                        at_torque_s[j] += dt_s;
+                        torque_hits[j] += u64::from(!was[j]);
+                    }
+                    was[j] = at;
                 }
-                was[j] = at;
+                this.any_was_at_torque = this.was_at_torque.contains(&true);
             }
-            self.any_was_at_speed = self.was_at_speed.contains(&true);
+            if any_at_speed || this.any_was_at_speed {
+                let was = &mut this.was_at_speed[..n];
+                for j in 0..n {
+                    let at = j < m && qd[j].abs() >= velocity[j];
+                    if at {
+                        at_speed_s[j] += dt_s;
+                        speed_hits[j] += u64::from(!was[j]);
+                    }
+                    was[j] = at;
+                }
+                this.any_was_at_speed = this.was_at_speed.contains(&true);
+            }
         }
+        body(self, tau_cmd, qd, dt_s)
     }
 
     /// Records, for the step of `dt_s` just recorded by [`Self::record`],

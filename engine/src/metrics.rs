@@ -427,93 +427,109 @@ impl MetricsAccumulator {
 
     /// Adds one step.
     pub fn record(&mut self, s: &StepSample<'_>) {
-        if s.fallen && self.fell_at_s.is_none() {
-            self.fell_at_s = Some(s.t_s);
-        }
-        // roll and pitch only count in the window (below)
-        let yaw = yaw_from_rot(s.base_rotation);
-        if !self.have_prev {
-            self.yaw_prev = yaw;
-            self.yaw_unwrapped = yaw;
-        } else {
-            let mut d = yaw - self.yaw_prev;
-            // `round` without its library call (the same bits)
-            d -= round_half_away(d / std::f64::consts::TAU) * std::f64::consts::TAU;
-            self.yaw_unwrapped += d;
-            self.yaw_prev = yaw;
-        }
-        let in_window = s.t_s >= self.window_start_s - 1e-12;
-        let mut touchdowns = 0;
-        for (i, f) in s.feet.iter().take(MAX_FEET).enumerate() {
-            if self.have_prev && f.in_contact && !self.prev_contact[i] {
-                touchdowns += 1;
+        // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
+        // fused multiply–add, so the same bits), in a free function:
+        // multiversion takes no `self`
+        #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+        fn body(this: &mut MetricsAccumulator, s: &StepSample<'_>) {
+            if s.fallen && this.fell_at_s.is_none() {
+                this.fell_at_s = Some(s.t_s);
             }
-            self.prev_contact[i] = f.in_contact;
-        }
-        self.have_prev = true;
-        if !in_window {
-            return;
-        }
-        if !self.started {
-            self.started = true;
-            self.t0 = s.t_s;
-            self.com_start = s.com_m;
-            self.com_h0 = self.heading_frame(s.com_m);
-        }
-        self.touchdowns += touchdowns;
-        self.t_last = s.t_s;
-        self.time_s += s.dt_s;
-        self.com_end = s.com_m;
-        let ch = self.heading_frame(s.com_m) - self.com_h0;
-        self.com_hy.add(ch.y);
-        self.com_hz.add(ch.z);
-        self.x_hulls.push(DVec2::new(s.t_s - self.t0, ch.x));
-        if self.tau_peak.len() != s.tau_joints.len() {
-            // only when the robot's joint count changes (first step, recompile)
-            self.tau_peak = vec![0.0; s.tau_joints.len()];
-            self.tau_abs_integral = vec![0.0; s.tau_joints.len()];
-        }
-        // zipped slices of one length: no bounds checks, and the
-        // element-wise loop vectorises (the same operations per joint)
-        for ((peak, integral), tau) in self
-            .tau_peak
-            .iter_mut()
-            .zip(self.tau_abs_integral.iter_mut())
-            .zip(s.tau_joints)
-        {
-            let a = tau.abs();
-            *peak = peak.max(a);
-            *integral += a * s.dt_s;
-        }
-        let v_fwd = s.com_velocity_mps.truncate().dot(self.heading);
-        self.speed_integral += v_fwd * s.dt_s;
-        self.peak_speed = self.peak_speed.max(v_fwd);
-        self.base_h.add(s.base_height_above_ground_m, s.dt_s);
-        self.com_h.add(s.com_height_above_ground_m, s.dt_s);
-        self.roll.add(&s.base_rotation);
-        self.pitch.add(&s.base_rotation);
-        self.yaw.add(self.yaw_unwrapped);
-        if let Some(qd) = s.q_desired {
-            for (d, q) in qd.iter().zip(s.q_joints) {
-                self.err_sq += (d - q) * (d - q);
+            // roll and pitch only count in the window (below)
+            let yaw = yaw_from_rot(s.base_rotation);
+            if !this.have_prev {
+                this.yaw_prev = yaw;
+                this.yaw_unwrapped = yaw;
+            } else {
+                let mut d = yaw - this.yaw_prev;
+                // `round` without its library call (the same bits)
+                d -= round_half_away(d / std::f64::consts::TAU) * std::f64::consts::TAU;
+                this.yaw_unwrapped += d;
+                this.yaw_prev = yaw;
             }
-            self.err_n += qd.len().min(s.q_joints.len()) as u64;
-        }
-        for (tau, qd) in s.tau_joints.iter().zip(s.qd_joints) {
-            self.energy += (tau * qd).abs() * s.dt_s;
-        }
-        let mut pts = [DVec2::ZERO; MAX_FEET];
-        let mut n = 0;
-        for f in s.feet.iter().take(MAX_FEET) {
-            self.max_force = self.max_force.max(f.force_n.z);
-            if f.in_contact {
-                pts[n] = f.position_m.truncate();
-                n += 1;
+            let in_window = s.t_s >= this.window_start_s - 1e-12;
+            let mut touchdowns = 0;
+            for (i, f) in s.feet.iter().take(MAX_FEET).enumerate() {
+                if this.have_prev && f.in_contact && !this.prev_contact[i] {
+                    touchdowns += 1;
+                }
+                this.prev_contact[i] = f.in_contact;
+            }
+            this.have_prev = true;
+            if !in_window {
+                return;
+            }
+            if !this.started {
+                this.started = true;
+                this.t0 = s.t_s;
+                this.com_start = s.com_m;
+                this.com_h0 = this.heading_frame(s.com_m);
+            }
+            this.touchdowns += touchdowns;
+            this.t_last = s.t_s;
+            this.time_s += s.dt_s;
+            this.com_end = s.com_m;
+            let ch = this.heading_frame(s.com_m) - this.com_h0;
+            this.com_hy.add(ch.y);
+            this.com_hz.add(ch.z);
+            this.x_hulls.push(DVec2::new(s.t_s - this.t0, ch.x));
+            if this.tau_peak.len() != s.tau_joints.len() {
+                // only when the robot's joint count changes (first step, recompile)
+                this.tau_peak = vec![0.0; s.tau_joints.len()];
+                this.tau_abs_integral = vec![0.0; s.tau_joints.len()];
+            }
+            // zipped slices of one length: no bounds checks, and the
+            // element-wise loop vectorises (the same operations per joint)
+            for ((peak, integral), tau) in this
+                .tau_peak
+                .iter_mut()
+                .zip(this.tau_abs_integral.iter_mut())
+                .zip(s.tau_joints)
+            {
+                let a = tau.abs();
+                // `peak.max(a)`, the same bits (the peak is never NaN nor −0:
+                // it starts at +0 and takes absolute values), without `max`'s
+                // NaN fix-up
+                *peak = if a > *peak { a } else { *peak };
+                *integral += a * s.dt_s;
+            }
+            let v_fwd = s.com_velocity_mps.truncate().dot(this.heading);
+            this.speed_integral += v_fwd * s.dt_s;
+            this.peak_speed = this.peak_speed.max(v_fwd);
+            this.base_h.add(s.base_height_above_ground_m, s.dt_s);
+            this.com_h.add(s.com_height_above_ground_m, s.dt_s);
+            this.roll.add(&s.base_rotation);
+            this.pitch.add(&s.base_rotation);
+            this.yaw.add(this.yaw_unwrapped);
+            // the sums in locals, in the same order: written back once, not
+            // stored at every term
+            if let Some(qd) = s.q_desired {
+                let mut err_sq = this.err_sq;
+                for (d, q) in qd.iter().zip(s.q_joints) {
+                    err_sq += (d - q) * (d - q);
+                }
+                this.err_sq = err_sq;
+                this.err_n += qd.len().min(s.q_joints.len()) as u64;
+            }
+            let mut energy = this.energy;
+            for (tau, qd) in s.tau_joints.iter().zip(s.qd_joints) {
+                energy += (tau * qd).abs() * s.dt_s;
+            }
+            this.energy = energy;
+            let mut pts = [DVec2::ZERO; MAX_FEET];
+            let mut n = 0;
+            for f in s.feet.iter().take(MAX_FEET) {
+                this.max_force = this.max_force.max(f.force_n.z);
+                if f.in_contact {
+                    pts[n] = f.position_m.truncate();
+                    n += 1;
+                }
+            }
+            if let Some(m) = stability_margin(&pts[..n], s.com_m.truncate()) {
+                this.min_margin = Some(this.min_margin.map_or(m, |x: f64| x.min(m)));
             }
         }
-        if let Some(m) = stability_margin(&pts[..n], s.com_m.truncate()) {
-            self.min_margin = Some(self.min_margin.map_or(m, |x: f64| x.min(m)));
-        }
+        body(self, s)
     }
 
     /// The summary so far.

@@ -86,6 +86,9 @@ pub fn signed_margin(poly: &[DVec2], p: DVec2) -> Option<f64> {
 
 /// Stability margin of a CoM projection over the given contact points (x, y):
 /// `None` with fewer than three points in contact.
+// (an x86-64-v3 clone: three-operand VEX forms; no fused multiply–add,
+// so the same bits)
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn stability_margin(contacts: &[DVec2], com_xy: DVec2) -> Option<f64> {
     if contacts.len() < 3 {
         return None;

@@ -466,7 +466,9 @@ fn cached_force(point: &ContactPoint, data: &Data, state: &ContactState) -> Opti
 /// at the new state: evaluates every contact and updates its state. At
 /// touchdown the anchor is set to the ground point; while slipping it is
 /// dragged so the spring sits at the friction limit; on lift-off the contact
-/// is cleared.
+/// is cleared. (Its x86-64-v3 clone's three-operand instructions spare
+/// register copies; no fused multiply–add, so both give the same bits.)
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn update_after_step(
     points: &[ContactPoint],
     data: &Data,

@@ -82,26 +82,39 @@ impl AttitudeFilter {
     /// One update over `dt_s` with the gyro (rad/s) and accelerometer
     /// (specific force, m/s²) readings, both torso frame; `g_mps2` is |gravity|.
     pub fn update(&mut self, gyro_radps: DVec3, accel_mps2: DVec3, g_mps2: f64, dt_s: f64) {
-        let p = self.params;
-        let f_w = self.orientation * accel_mps2;
-        let alpha = if p.accel_filter_s > 0.0 {
-            1.0 - (-dt_s / p.accel_filter_s).exp()
-        } else {
-            1.0
-        };
-        let f_bar = match self.accel_world_filtered_mps2 {
-            Some(f) => f + alpha * (f_w - f),
-            None => f_w,
-        };
-        self.accel_world_filtered_mps2 = Some(f_bar);
-        let n = f_bar.length();
-        let mut e = DVec3::ZERO;
-        if n > 0.0 && (n - g_mps2).abs() <= p.accel_gate_mps2 {
-            e = self.orientation.inverse() * (f_bar / n).cross(DVec3::Z);
+        // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
+        // fused multiply–add, so the same bits), in a free function:
+        // multiversion takes no `self`
+        #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+        fn body(
+            this: &mut AttitudeFilter,
+            gyro_radps: DVec3,
+            accel_mps2: DVec3,
+            g_mps2: f64,
+            dt_s: f64,
+        ) {
+            let p = this.params;
+            let f_w = this.orientation * accel_mps2;
+            let alpha = if p.accel_filter_s > 0.0 {
+                1.0 - (-dt_s / p.accel_filter_s).exp()
+            } else {
+                1.0
+            };
+            let f_bar = match this.accel_world_filtered_mps2 {
+                Some(f) => f + alpha * (f_w - f),
+                None => f_w,
+            };
+            this.accel_world_filtered_mps2 = Some(f_bar);
+            let n = f_bar.length();
+            let mut e = DVec3::ZERO;
+            if n > 0.0 && (n - g_mps2).abs() <= p.accel_gate_mps2 {
+                e = this.orientation.inverse() * (f_bar / n).cross(DVec3::Z);
+            }
+            this.gyro_bias_radps -= p.ki_radps2 * e * dt_s;
+            let w = gyro_radps - this.gyro_bias_radps + p.kp_radps * e;
+            this.omega_radps = gyro_radps - this.gyro_bias_radps;
+            this.orientation = (this.orientation * DQuat::from_scaled_axis(w * dt_s)).normalize();
         }
-        self.gyro_bias_radps -= p.ki_radps2 * e * dt_s;
-        let w = gyro_radps - self.gyro_bias_radps + p.kp_radps * e;
-        self.omega_radps = gyro_radps - self.gyro_bias_radps;
-        self.orientation = (self.orientation * DQuat::from_scaled_axis(w * dt_s)).normalize();
+        body(self, gyro_radps, accel_mps2, g_mps2, dt_s)
     }
 }

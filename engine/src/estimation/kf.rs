@@ -235,8 +235,16 @@ impl BaseKf {
     pub fn update(&mut self, feet: &[FootMeasurement]) {
         let kp = self.params;
         let (x, p) = self.parts();
-        update_feet(&kp, x, p, feet);
+        DOWNDATES.with_borrow_mut(|block| update_feet(&kp, x, p, feet, block));
     }
+}
+
+thread_local! {
+    /// [`BaseKf::update`]'s block of downdates: this thread's, so that each
+    /// update does not zero a new one on its stack (1 KiB); each downdate
+    /// is written before it is read.
+    static DOWNDATES: std::cell::RefCell<Downdates> =
+        const { std::cell::RefCell::new(Downdates::new()) };
 }
 
 /// The covariance, column-major.
@@ -248,8 +256,14 @@ type Cov = [f64; KF_N * KF_N];
 /// (An AVX-512 clone, tried, was no faster here: 0.83–1.09 µs per update
 /// against 0.94–1.03 µs; the generic code takes 1.5–1.6 µs.)
 #[multiversion(targets("x86_64+avx2+fma"))]
-fn update_feet(kp: &KfParams, x: &mut [f64; KF_N], p: &mut Cov, feet: &[FootMeasurement]) {
-    update_feet_body(kp, x, p, feet);
+fn update_feet(
+    kp: &KfParams,
+    x: &mut [f64; KF_N],
+    p: &mut Cov,
+    feet: &[FootMeasurement],
+    block: &mut Downdates,
+) {
+    update_feet_body(kp, x, p, feet, block);
 }
 
 /// [`update_feet`] compiled for the build's generic target only: for the
@@ -257,36 +271,35 @@ fn update_feet(kp: &KfParams, x: &mut [f64; KF_N], p: &mut Cov, feet: &[FootMeas
 #[cfg(test)]
 #[inline(never)]
 fn update_feet_generic(kp: &KfParams, x: &mut [f64; KF_N], p: &mut Cov, feet: &[FootMeasurement]) {
-    update_feet_body(kp, x, p, feet);
+    update_feet_body(kp, x, p, feet, &mut Downdates::new());
 }
 
 #[inline(always)]
-fn update_feet_body(kp: &KfParams, x: &mut [f64; KF_N], p: &mut Cov, feet: &[FootMeasurement]) {
+fn update_feet_body(
+    kp: &KfParams,
+    x: &mut [f64; KF_N],
+    p: &mut Cov,
+    feet: &[FootMeasurement],
+    block: &mut Downdates,
+) {
     let rp = kp.foot_position_std_m.powi(2);
     let rv = kp.foot_velocity_std_mps.powi(2);
     let rh = kp.foot_height_std_m.powi(2);
-    let mut block = Downdates::new();
+    // (empty unless an earlier update unwound mid-foot)
+    block.n = 0;
     let n_feet = feet.len().min(KF_FEET);
     // whether some of P's lower triangle is behind the upper (see below)
     let mut lower_behind = false;
     for (i, m) in feet.iter().take(KF_FEET).enumerate() {
         let fi = 6 + 3 * i;
         for k in 0..3 {
-            measure(
-                x,
-                p,
-                &mut block,
-                fi + k,
-                Some(k),
-                m.relative_position_m[k],
-                rp,
-            );
+            measure(x, p, block, fi + k, Some(k), m.relative_position_m[k], rp);
         }
         if m.stance {
             // a slipping or still-landing foot moves: reject its velocity
             // when the innovation is beyond the gate (χ² with 3 dof)
             let z = -m.relative_velocity_mps;
-            let var = velocity_variances(p, &block);
+            let var = velocity_variances(p, block);
             let mut chi2 = 0.0;
             for k in 0..3 {
                 let d = z[k] - x[3 + k];
@@ -294,17 +307,17 @@ fn update_feet_body(kp: &KfParams, x: &mut [f64; KF_N], p: &mut Cov, feet: &[Foo
             }
             if kp.velocity_gate_chi2 <= 0.0 || chi2 <= kp.velocity_gate_chi2 {
                 for k in 0..3 {
-                    measure(x, p, &mut block, 3 + k, None, z[k], rv);
+                    measure(x, p, block, 3 + k, None, z[k], rv);
                 }
             }
-            measure(x, p, &mut block, fi + 2, None, m.ground_height_m, rh);
+            measure(x, p, block, fi + 2, None, m.ground_height_m, rh);
         }
         // Between feet, the lower triangle is brought up to date only in the
         // columns the next foot's measurements read (the base's and its
         // own); the last foot's block completes it, so that P is whole
         // again when the update returns.
         let next = (i + 1 < n_feet).then_some(i + 1);
-        lower_behind = apply_then_mirror(p, &mut block, lower_behind, next);
+        lower_behind = apply_then_mirror(p, block, lower_behind, next);
     }
 }
 
@@ -505,7 +518,7 @@ struct Downdates {
 }
 
 impl Downdates {
-    fn new() -> Self {
+    const fn new() -> Self {
         Downdates {
             g: [[0.0; KF_N]; BLOCK],
             n: 0,

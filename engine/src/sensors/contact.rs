@@ -62,17 +62,24 @@ impl ContactSensors {
     /// Call at every simulation step with each foot's true normal force (N)
     /// at `t_s`; returns whether a new sample was taken.
     pub fn update(&mut self, t_s: f64, normal_force_n: &[f64]) -> bool {
-        let Some(dt) = self.gate.tick(t_s) else {
-            return false;
-        };
-        let p = self.params;
-        for (i, ch) in self.channels.iter_mut().enumerate() {
-            let f = ch.sample(normal_force_n[i], dt, &mut self.rng);
-            self.in_contact[i] =
-                hysteresis(self.in_contact[i], f, p.on_threshold_n, p.off_threshold_n);
-            self.force_n[i] = if p.force_output { f } else { f64::NAN };
+        // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
+        // fused multiply–add, so the same bits), in a free function:
+        // multiversion takes no `self`
+        #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+        fn body(this: &mut ContactSensors, t_s: f64, normal_force_n: &[f64]) -> bool {
+            let Some(dt) = this.gate.tick(t_s) else {
+                return false;
+            };
+            let p = this.params;
+            for (i, ch) in this.channels.iter_mut().enumerate() {
+                let f = ch.sample(normal_force_n[i], dt, &mut this.rng);
+                this.in_contact[i] =
+                    hysteresis(this.in_contact[i], f, p.on_threshold_n, p.off_threshold_n);
+                this.force_n[i] = if p.force_output { f } else { f64::NAN };
+            }
+            true
         }
-        true
+        body(self, t_s, normal_force_n)
     }
 }
 

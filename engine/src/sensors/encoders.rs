@@ -105,46 +105,53 @@ impl Encoders {
     /// Call at every simulation step with the true joint angles and
     /// velocities at `t_s`; returns whether a new sample was taken.
     pub fn update(&mut self, t_s: f64, q_rad: &[f64], qd_radps: &[f64]) -> bool {
-        let Some(dt) = self.gate.tick(t_s) else {
-            return false;
-        };
-        // the velocity filter's coefficient, the same for every joint
-        let alpha = match self.params.velocity {
-            JointVelocityMode::Differencing {
-                filter_time_constant_s,
-            } if filter_time_constant_s > 0.0 => 1.0 - (-dt / filter_time_constant_s).exp(),
-            _ => 1.0,
-        };
-        // every joint's slots zipped (no bounds check per joint); a short
-        // `q_rad` or `qd_radps` still panics, as indexing did
-        let n_joints = self.channels.len();
-        let (q_rad, qd_radps) = (&q_rad[..n_joints], &qd_radps[..n_joints]);
-        let joints = self
-            .channels
-            .iter_mut()
-            .zip(q_rad.iter().zip(qd_radps))
-            .zip(self.position_rad.iter_mut().zip(&mut self.velocity_radps));
-        // the velocity's source decided once for every joint
-        let velocity = match self.params.velocity {
-            JointVelocityMode::Direct { noise_std_radps } => Some(noise_std_radps),
-            JointVelocityMode::Differencing { .. } => None,
-        };
-        let differences = self.sampled && dt > 0.0;
-        for ((ch, (&q, &qd)), (pos, vel)) in joints {
-            let theta = ch.sample(q, dt, &mut self.rng);
-            let n = gaussian(&mut self.rng);
-            let w = match velocity {
-                Some(noise_std_radps) => qd + noise_std_radps * n,
-                None if differences => {
-                    let raw = (theta - *pos) / dt;
-                    *vel + alpha * (raw - *vel)
-                }
-                None => 0.0,
+        // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
+        // fused multiply–add, so the same bits), in a free function:
+        // multiversion takes no `self`
+        #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+        fn body(this: &mut Encoders, t_s: f64, q_rad: &[f64], qd_radps: &[f64]) -> bool {
+            let Some(dt) = this.gate.tick(t_s) else {
+                return false;
             };
-            *pos = theta;
-            *vel = w;
+            // the velocity filter's coefficient, the same for every joint
+            let alpha = match this.params.velocity {
+                JointVelocityMode::Differencing {
+                    filter_time_constant_s,
+                } if filter_time_constant_s > 0.0 => 1.0 - (-dt / filter_time_constant_s).exp(),
+                _ => 1.0,
+            };
+            // every joint's slots zipped (no bounds check per joint); a short
+            // `q_rad` or `qd_radps` still panics, as indexing did
+            let n_joints = this.channels.len();
+            let (q_rad, qd_radps) = (&q_rad[..n_joints], &qd_radps[..n_joints]);
+            let joints = this
+                .channels
+                .iter_mut()
+                .zip(q_rad.iter().zip(qd_radps))
+                .zip(this.position_rad.iter_mut().zip(&mut this.velocity_radps));
+            // the velocity's source decided once for every joint
+            let velocity = match this.params.velocity {
+                JointVelocityMode::Direct { noise_std_radps } => Some(noise_std_radps),
+                JointVelocityMode::Differencing { .. } => None,
+            };
+            let differences = this.sampled && dt > 0.0;
+            for ((ch, (&q, &qd)), (pos, vel)) in joints {
+                let theta = ch.sample(q, dt, &mut this.rng);
+                let n = gaussian(&mut this.rng);
+                let w = match velocity {
+                    Some(noise_std_radps) => qd + noise_std_radps * n,
+                    None if differences => {
+                        let raw = (theta - *pos) / dt;
+                        *vel + alpha * (raw - *vel)
+                    }
+                    None => 0.0,
+                };
+                *pos = theta;
+                *vel = w;
+            }
+            this.sampled = true;
+            true
         }
-        self.sampled = true;
-        true
+        body(self, t_s, q_rad, qd_radps)
     }
 }
