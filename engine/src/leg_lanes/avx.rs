@@ -85,31 +85,35 @@ impl GroupKinematics {
     }
 }
 
-/// Group `g`'s (bodies `grp`) motion subspaces, inertias and velocities
-/// (reference frame) in lanes: from `data`'s lane cache when it holds them,
-/// else gathered from the per-body arrays that forward kinematics filled.
+/// The motions `m[i]` of the bodies `grp` in lanes, element by element (no
+/// copies of whole structs).
 #[inline(always)]
-fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
-    // element by element from the four bodies, no copies of whole structs
+fn gather_motions(m: &[Motion], grp: &[usize; LEGS]) -> Motion4 {
     let [a, b, c, d] = *grp;
-    let v3 = |p: [&DVec3; LEGS]| {
-        V3::new(
-            F4::from_array([p[0].x, p[1].x, p[2].x, p[3].x]),
-            F4::from_array([p[0].y, p[1].y, p[2].y, p[3].y]),
-            F4::from_array([p[0].z, p[1].z, p[2].z, p[3].z]),
-        )
-    };
-    let motion = |m: &[Motion]| {
-        let (ma, mb, mc, md) = (&m[a], &m[b], &m[c], &m[d]);
-        Motion4::new(
-            v3([&ma.lin, &mb.lin, &mc.lin, &md.lin]),
-            v3([&ma.ang, &mb.ang, &mc.ang, &md.ang]),
-        )
-    };
-    if data.lanes.valid {
-        let k = &data.lanes.groups[g];
-        return (k.s, k.inertia, motion(&data.vel));
-    }
+    let (ma, mb, mc, md) = (&m[a], &m[b], &m[c], &m[d]);
+    Motion4::new(
+        gather_v3([&ma.lin, &mb.lin, &mc.lin, &md.lin]),
+        gather_v3([&ma.ang, &mb.ang, &mc.ang, &md.ang]),
+    )
+}
+
+/// Four vectors in lanes, element by element.
+#[inline(always)]
+fn gather_v3(p: [&DVec3; LEGS]) -> V3 {
+    V3::new(
+        F4::from_array([p[0].x, p[1].x, p[2].x, p[3].x]),
+        F4::from_array([p[0].y, p[1].y, p[2].y, p[3].y]),
+        F4::from_array([p[0].z, p[1].z, p[2].z, p[3].z]),
+    )
+}
+
+/// Group `grp`'s motion subspaces and inertias (reference frame) in lanes,
+/// gathered from the per-body arrays that forward kinematics filled (when
+/// `data`'s lane cache does not hold them).
+#[inline(always)]
+fn gather_kinematics(grp: &[usize; LEGS], data: &Data) -> GroupKinematics {
+    let [a, b, c, d] = *grp;
+    let v3 = gather_v3;
     let ir = &data.inertia_ref;
     let (ia, ib, ic, id) = (&ir[a], &ir[b], &ir[c], &ir[d]);
     let (ja, jb, jc, jd) = (
@@ -127,15 +131,29 @@ fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Ine
             v3([&ja.z_axis, &jb.z_axis, &jc.z_axis, &jd.z_axis]),
         ),
     };
-    (motion(&data.s), inertia, motion(&data.vel))
+    GroupKinematics {
+        s: gather_motions(&data.s, grp),
+        inertia,
+    }
+}
+
+/// Group `g`'s (bodies `grp`) motion subspaces, inertias and velocities
+/// (reference frame) in lanes: from `data`'s lane cache when it holds them,
+/// else gathered from the per-body arrays that forward kinematics filled.
+#[inline(always)]
+fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+    if data.lanes.valid {
+        let k = &data.lanes.groups[g];
+        return (k.s, k.inertia, gather_motions(&data.vel, grp));
+    }
+    let k = gather_kinematics(grp, data);
+    (k.s, k.inertia, gather_motions(&data.vel, grp))
 }
 
 /// What ABA's last pass needs of one group, kept from the inward pass (one
 /// per thread: it holds nothing between calls).
 #[derive(Clone, Copy, Debug, Default)]
 struct GroupAba {
-    /// Motion subspace columns, reference frame.
-    s: Motion4,
     /// `U = Iᴬ S`.
     u: Force4,
     /// `1 / D`.
@@ -358,8 +376,20 @@ pub(crate) fn aba_passes_legs(
     let (v, tau) = (&v[..nv], &tau[..nv]);
     let f_ext = &data.f_ext[..n];
     // ABA's per-group workspace, from pass 2 to pass 3 of this call only.
-    let mut work_all = take_group_aba(ng);
+    let (mut work_all, mut kin_all) = take_group_aba(ng);
     let work = &mut work_all[..ng];
+    // The groups' subspaces and inertias, read in place: from the lane
+    // cache, else gathered once into this thread's scratch. (Merged into one
+    // by-value result per group, the cached ones were copied to the stack.)
+    let kin: &[GroupKinematics] = if data.lanes.valid {
+        &data.lanes.groups[..ng]
+    } else {
+        let scratch = &mut kin_all[..ng];
+        for (k, grp) in scratch.iter_mut().zip(groups) {
+            *k = gather_kinematics(grp, data);
+        }
+        scratch
+    };
     // Pass 1 of the base; its children's terms are added below.
     let (mut ia0, mut pa0) = base_pass1(
         &data.inertia_ref[0],
@@ -368,14 +398,19 @@ pub(crate) fn aba_passes_legs(
     );
     // Pass 2 from the feet to the hips, with pass 1 of each group on the way:
     // a body's own Iᴬ and pᴬ, then its one child's term added, as the
-    // general path's `+=` does.
+    // general path's `+=` does. Iᴬ stays in `ia`, in memory: the feet's own,
+    // then each parent's own plus its child's downdated term, in place.
     let one = F4::splat(1.0);
-    let mut child: Option<(Sym6x4, Force4)> = None;
+    let mut ia = match kin.last() {
+        Some(k) => k.inertia.to_sym6(),
+        None => Sym6x4::default(),
+    };
+    let mut child_pa: Option<Force4> = None;
     for g in (0..ng).rev() {
         let grp = &groups[g];
         let st = &plan.steps[g];
-        let (s, inertia, vi) = group_kinematics(g, grp, data);
-        let mut ia = inertia.to_sym6();
+        let GroupKinematics { s, inertia } = &kin[g];
+        let vi = gather_motions(&data.vel, grp);
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
             pai = pai.sub(gather_forces(f_ext, grp));
@@ -383,35 +418,32 @@ pub(crate) fn aba_passes_legs(
         // one check for the gathers of v, armature and tau below
         assert_joints_within(&st.idx_v, nv);
         let c = vi.cross(s.scale(gather(v, &st.idx_v)));
-        if let Some((cia, cpa)) = child {
-            ia = ia.add(cia);
+        if let Some(cpa) = child_pa {
             pai = pai.add(cpa);
         }
-        let u = ia.mul_motion(s);
+        let u = sym6_mul_motion(&ia, s);
         let d_inv = one.div(s.dot(u).add(gather(armature, &st.idx_v)));
         let ut = gather(tau, &st.idx_v).sub(s.dot(pai));
-        let ia_c = ia.mul_motion(c);
-        let ul = u.lin.scale(d_inv);
-        let ua = u.ang.scale(d_inv);
-        let term = Sym6x4 {
-            m: ia.m.sub(outer(ul, u.lin)),
-            h: ia.h.sub(outer(ua, u.lin)),
-            i: ia.i.sub(outer(ua, u.ang)),
-        };
+        let ia_c = sym6_mul_motion(&ia, &c);
         let pa = pai.add(ia_c).add(u.scale(ut.sub(c.dot(u)).mul(d_inv)));
         work[g] = GroupAba {
-            s,
             u,
             d_inv,
             u_tau: ut,
             c,
         };
-        child = Some((term, pa));
+        downdate_into(
+            &mut ia,
+            &u,
+            d_inv,
+            g.checked_sub(1).map(|p| &kin[p].inertia),
+        );
+        child_pa = Some(pa);
     }
     // The hips' terms into the base, in decreasing body index (lane 3 first),
     // as the general path's reverse depth order adds them.
-    if let Some((term, pa)) = child {
-        add_hips_into_base(&mut ia0, &mut pa0, &term, &pa);
+    if let Some(pa) = child_pa {
+        add_hips_into_base(&mut ia0, &mut pa0, &ia, &pa);
     }
     // Pass 3: accelerations, root to leaves; gravity as a fictitious upward
     // acceleration of the base.
@@ -437,14 +469,14 @@ pub(crate) fn aba_passes_legs(
     let mut a_parent = Motion4::splat(a0);
     let acc = &mut data.acc[..n];
     let ddq = &mut data.ddq[..nv];
-    for ((grp, st), w) in groups.iter().zip(&plan.steps).zip(work.iter()) {
+    for (((grp, st), w), k) in groups.iter().zip(&plan.steps).zip(work.iter()).zip(kin) {
         let a = a_parent.add(w.c);
         let qdd = w
             .u_tau
             .sub(w.u.lin.dot(a.lin))
             .sub(w.u.ang.dot(a.ang))
             .mul(w.d_inv);
-        let a_i = a.add(w.s.scale(qdd));
+        let a_i = a.add(k.s.scale(qdd));
         let qdds = qdd.to_array();
         assert_joints_within(&st.idx_v, nv);
         for k in 0..LEGS {
@@ -465,7 +497,35 @@ pub(crate) fn aba_passes_legs(
         let aa = rt * a0_true.ang;
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
-    GROUP_ABA.with(|cell| drop(cell.replace(work_all)));
+    GROUP_ABA.with(|cell| drop(cell.replace((work_all, kin_all))));
+}
+
+/// `Iᴬ v` for one group, `ia` read from memory. Not inlined, like
+/// [`downdate_into`]: inlined, LLVM kept Iᴬ's 27 registers live across the
+/// whole group and spilled them.
+#[inline(never)]
+#[target_feature(enable = "avx")]
+fn sym6_mul_motion(ia: &Sym6x4, v: &Motion4) -> Force4 {
+    ia.mul_motion(*v)
+}
+
+/// ABA's downdate of one group in place: `ia ← own + (ia − U Uᵀ/D)`, the
+/// parent's Iᴬ (its own rigid inertia `own` plus its one child's term, in
+/// the general path's order), or the term alone for the hips (`own` none).
+#[inline(never)]
+#[target_feature(enable = "avx")]
+fn downdate_into(ia: &mut Sym6x4, u: &Force4, d_inv: F4, own: Option<&Inertia4>) {
+    let ul = u.lin.scale(d_inv);
+    let ua = u.ang.scale(d_inv);
+    let term = Sym6x4 {
+        m: ia.m.sub(outer(ul, u.lin)),
+        h: ia.h.sub(outer(ua, u.lin)),
+        i: ia.i.sub(outer(ua, u.ang)),
+    };
+    *ia = match own {
+        Some(o) => o.to_sym6().add(term),
+        None => term,
+    };
 }
 
 /// `ia0 += Σ term` and `pa0 += Σ pa` over the lanes, lane 3 first, each
@@ -590,18 +650,27 @@ pub(crate) fn rnea_passes_legs(
     }
 }
 
+/// A thread's ABA workspace: the groups' terms from pass 2 to pass 3, and
+/// room for their kinematics when the lane cache does not hold them.
+type AbaWorkspace = (Vec<GroupAba>, Vec<GroupKinematics>);
+
 thread_local! {
-    static GROUP_ABA: std::cell::RefCell<Vec<GroupAba>> = const { std::cell::RefCell::new(Vec::new()) };
+    static GROUP_ABA: std::cell::RefCell<AbaWorkspace> = const {
+        std::cell::RefCell::new((Vec::new(), Vec::new()))
+    };
 }
 
-/// This thread's ABA workspace of `ng` groups (every entry is written by
-/// pass 2 before pass 3 reads it), lent until given back.
-fn take_group_aba(ng: usize) -> Vec<GroupAba> {
-    let mut w = GROUP_ABA.with(std::cell::RefCell::take);
+/// This thread's ABA workspace of `ng` groups (every entry is written
+/// before it is read), lent until given back.
+fn take_group_aba(ng: usize) -> AbaWorkspace {
+    let (mut w, mut k) = GROUP_ABA.with(std::cell::RefCell::take);
     if w.len() < ng {
         w.resize(ng, GroupAba::default());
     }
-    w
+    if k.len() < ng {
+        k.resize(ng, GroupKinematics::default());
+    }
+    (w, k)
 }
 
 /// Sizes this thread's ABA workspace for `plan` (by `Data::new`, so that
