@@ -154,8 +154,11 @@ impl F4 {
     /// `sincos`): [`crate::trig::sin_cos_lanes`]' operations, each one AVX
     /// instruction (that function's plain-Rust lane loops do not all
     /// vectorise); lanes that need libm's second reduction round or large
-    /// argument path call it.
-    #[inline]
+    /// argument path call it. Not inlined: inlined into
+    /// [`rotate_about_axis`], that grew past LLVM's inlining threshold and
+    /// was called out of line from the pose loops instead (about 100
+    /// instructions a step more).
+    #[inline(never)]
     #[target_feature(enable = "avx")]
     pub fn sin_cos(self) -> (Self, Self) {
         use crate::trig::*;
