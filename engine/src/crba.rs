@@ -85,7 +85,7 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) -> MassMatrix {
             match model.joint_type[j] {
                 JointType::Free => {
                     for k in 0..6 {
-                        let x = data.s_base[k].dot(f);
+                        let x = data.base_subspace(k).dot(f);
                         mm[iv * nv + k] = x;
                         mm[k * nv + iv] = x;
                     }
@@ -103,9 +103,9 @@ pub fn crba_from_kinematics(model: &Model, data: &mut Data) -> MassMatrix {
     }
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
-            let f = ia[0].mul_motion(data.s_base[k]);
+            let f = ia[0].mul_motion(data.base_subspace(k));
             for l in k..6 {
-                let x = data.s_base[l].dot(f);
+                let x = data.base_subspace(l).dot(f);
                 mm[l * nv + k] = x;
                 mm[k * nv + l] = x;
             }

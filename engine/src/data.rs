@@ -28,8 +28,6 @@ pub struct Data {
     /// cache is valid, the legs' entries here are stale (forward kinematics
     /// in lanes keeps them only in the lanes, saving the scatter).
     pub(crate) s: Vec<Motion>,
-    /// Motion subspace of the free base, reference frame: columns for `v[0..6]`.
-    pub s_base: [Motion; 6],
     /// Each body's rigid inertia in the reference frame (CoM relative to `origin`)
     /// (nbodies; empty in a kinematics-only `Data`). Read through
     /// [`Data::body_inertia`]: while the legs' lane cache is valid, the legs'
@@ -62,7 +60,7 @@ pub struct Data {
     pub jacobian: Vec<f64>,
     /// Scratch of length nv.
     pub scratch_v: Vec<f64>,
-    /// What the kinematic fields (`origin`, `pose`, `s`, `s_base`,
+    /// What the kinematic fields (`origin`, `pose`, `s`,
     /// `inertia_ref`, `vel`) were computed for, so that a repeated call at
     /// the same state (observation, then the integrator's first stage) is
     /// skipped: see [`crate::kinematics::forward_kinematics`].
@@ -121,7 +119,6 @@ impl Data {
             pose: vec![Transform::IDENTITY; nb],
             vel: vec![Motion::ZERO; nb],
             s: vec![Motion::ZERO; nb],
-            s_base: [Motion::ZERO; 6],
             inertia_ref: dyn_vec(dynamics, RigidInertia::ZERO, nb),
             acc: dyn_vec(dynamics, Motion::ZERO, nb),
             f: dyn_vec(dynamics, Force::ZERO, nb),
@@ -246,6 +243,21 @@ impl Data {
             return self.lanes.groups[g].s_lane(k);
         }
         self.s[i]
+    }
+
+    /// Column `k` (0..6, for `v[k]`) of the free base's motion subspace,
+    /// reference frame: the base's rotation's column `k` as linear (k < 3)
+    /// or angular (k ≥ 3) part, the other part zero. Computed from
+    /// `pose[0]` where it is read (a few times per control tick) instead of
+    /// stored by every forward kinematics (six motions, 288 bytes per robot).
+    #[inline(always)]
+    pub fn base_subspace(&self, k: usize) -> Motion {
+        let r = &self.pose[0].rot;
+        if k < 3 {
+            Motion::new(r.col(k), DVec3::ZERO)
+        } else {
+            Motion::new(DVec3::ZERO, r.col(k - 3))
+        }
     }
 
     /// `f(i, inertia)` for every body `i` in increasing order, with

@@ -24,7 +24,7 @@ pub fn point_jacobian<'d>(
         match model.joint_type[j] {
             JointType::Free => {
                 for k in 0..6 {
-                    let c = data.s_base[k].point_velocity(r);
+                    let c = data.base_subspace(k).point_velocity(r);
                     set_col(&mut data.jacobian, nv, k, c);
                 }
             }
@@ -62,7 +62,7 @@ pub fn add_point_force_jt(
         match model.joint_type[j] {
             JointType::Free => {
                 for k in 0..6 {
-                    tau[k] += data.s_base[k].point_velocity(r).dot(force_n);
+                    tau[k] += data.base_subspace(k).point_velocity(r).dot(force_n);
                 }
             }
             JointType::Anchored => {}

@@ -25,7 +25,7 @@ fn joint_transform(jt: JointType, axis: DVec3, qi: f64) -> Transform {
     }
 }
 
-/// Poses only (no velocities): fills `pose`, `s`, `s_base`, `inertia_ref`
+/// Poses only (no velocities): fills `pose`, `s`, `inertia_ref`
 /// (not in a kinematics-only [`Data`]) and sets `origin`.
 ///
 /// After this call, [`Data::origin`] is the base origin and every spatial
@@ -77,13 +77,6 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     data.lanes.valid = false;
     let origin = base.trans;
     data.pose[0] = base;
-    if model.joint_type[0] == JointType::Free {
-        let r = base.rot;
-        for k in 0..3 {
-            data.s_base[k] = Motion::new(r.col(k), DVec3::ZERO);
-            data.s_base[k + 3] = Motion::new(DVec3::ZERO, r.col(k));
-        }
-    }
     let step = &model.pose_step[..n];
     let base_rot = Transform::new(base.rot, DVec3::ZERO);
     // (a kinematics-only `Data` has no reference inertias)

@@ -30,7 +30,7 @@ pub fn rnea_from_kinematics(
     let mut a0 = a_grav;
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
-            a0 += data.s_base[k] * a[k];
+            a0 += data.base_subspace(k) * a[k];
         }
     }
     data.acc[0] = a0;
@@ -42,7 +42,7 @@ pub fn rnea_from_kinematics(
     rnea_bodies(model, data, v, a, use_external);
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
-            data.tau[k] = data.s_base[k].dot(data.f[0]);
+            data.tau[k] = data.base_subspace(k).dot(data.f[0]);
         }
     }
 }

@@ -12,7 +12,7 @@ use multiversion::multiversion;
 
 /// Poses and velocities of every active lane from `bd.q` and `bd.v`: fills
 /// `origin`, `pose`, `s`, `inertia_ref` and `vel` of `bd` (the free base's
-/// `s_base` of [`crate::Data`] is not needed by ABA and not computed).
+/// subspace, [`crate::Data::base_subspace`], is not needed by ABA).
 ///
 /// Compiled for x86-64-v3 (AVX2) and the generic target; the CPU picks one
 /// at run time (see [the module doc](super)).

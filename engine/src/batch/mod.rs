@@ -227,7 +227,7 @@ impl<const L: usize> BatchData<L> {
 
     /// Copies lane `lane`'s kinematics (after [`forward_kinematics_batch`] on
     /// `(q, v)`, which must be that lane's state) into a scalar `data`:
-    /// `origin`, `pose`, `s`, `s_base`, `inertia_ref`, `vel`, and marks them
+    /// `origin`, `pose`, `s`, `inertia_ref`, `vel`, and marks them
     /// valid for `(model, q, v)`, exactly as [`crate::kinematics::forward_kinematics`]
     /// would have left them.
     pub fn kinematics_into(
@@ -238,9 +238,7 @@ impl<const L: usize> BatchData<L> {
         q: &[f64],
         v: &[f64],
     ) {
-        use crate::model::JointType;
-        use crate::spatial::{Motion, RigidInertia};
-        use glam::DVec3;
+        use crate::spatial::RigidInertia;
         let n = model.nbodies;
         data.origin = self.origin.lane(lane);
         for i in 0..n {
@@ -255,13 +253,6 @@ impl<const L: usize> BatchData<L> {
         }
         for i in 1..n {
             data.s[i] = self.s[i].lane(lane);
-        }
-        if model.joint_type[0] == JointType::Free {
-            let r = data.pose[0].rot;
-            for k in 0..3 {
-                data.s_base[k] = Motion::new(r.col(k), DVec3::ZERO);
-                data.s_base[k + 3] = Motion::new(DVec3::ZERO, r.col(k));
-            }
         }
         // the per-body arrays hold every body now, the legs' lane cache an older state
         data.lanes.valid = false;

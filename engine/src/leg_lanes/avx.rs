@@ -263,7 +263,13 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let pose = &mut data.pose[..n];
     let s_all = &mut data.s[..n];
     let vel = &mut data.vel[..n];
-    let mut inertia_ref = with_inertia.then(|| &mut data.inertia_ref[..n]);
+    // (an `if`, not `bool::then`: that one is not inlined into this AVX
+    // function and cost a call, about 25 instructions per step)
+    let mut inertia_ref = if with_inertia {
+        Some(&mut data.inertia_ref[..n])
+    } else {
+        None
+    };
     // The lane cache, when this call fills every entry it holds.
     let ng = plan.groups.len();
     let cache = &mut data.lanes.groups;
