@@ -31,7 +31,7 @@ pub(crate) struct GroupStep {
     /// Each joint's index in q.
     idx_q: [usize; LEGS],
     /// Each joint's index in v.
-    idx_v: [usize; LEGS],
+    pub(super) idx_v: [usize; LEGS],
 }
 
 impl GroupStep {
@@ -89,7 +89,11 @@ impl GroupKinematics {
 /// (reference frame) in lanes: from `data`'s lane cache when it holds them,
 /// else gathered from the per-body arrays that forward kinematics filled.
 #[inline(always)]
-fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+pub(super) fn group_kinematics(
+    g: usize,
+    grp: &[usize; LEGS],
+    data: &Data,
+) -> (Motion4, Inertia4, Motion4) {
     // element by element from the four bodies, no copies of whole structs
     let [a, b, c, d] = *grp;
     let v3 = |p: [&DVec3; LEGS]| {
@@ -158,7 +162,7 @@ fn assert_joints_within(idx: &[usize; LEGS], nv: usize) {
 }
 
 #[inline(always)]
-fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
+pub(super) fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
     F4::from_array([x[idx[0]], x[idx[1]], x[idx[2]], x[idx[3]]])
 }
 
