@@ -47,6 +47,58 @@ pub fn rnea_from_kinematics(
     }
 }
 
+/// The joint rows of [`rnea_from_kinematics`] without external forces,
+/// `tau_joints[j − base_nv] = tau[j]` bit for bit, for a caller that reads
+/// only them (the walker's feed-forward): with the legs in lanes, neither
+/// the base's force and rows nor any body's `acc` and `f` are formed or
+/// stored (about 40% of the pass). Otherwise the full RNEA runs. `data`'s
+/// `acc`, `f` and `tau` are then unspecified (not those of the full RNEA).
+pub fn rnea_joint_torques_from_kinematics(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    a: &[f64],
+    tau_joints: &mut [f64],
+) {
+    let nv0 = model.base_nv();
+    assert_eq!(tau_joints.len(), model.nv - nv0, "one torque per joint");
+    // the base's acceleration, as the full RNEA forms it
+    let mut a0 = Motion::new(-model.gravity, glam::DVec3::ZERO);
+    if model.joint_type[0] == JointType::Free {
+        for k in 0..6 {
+            a0 += data.s_base[k] * a[k];
+        }
+    }
+    if !rnea_joint_torques_in_lanes(model, data, v, a, a0, tau_joints) {
+        rnea_from_kinematics(model, data, v, a, false);
+        tau_joints.copy_from_slice(&data.tau[nv0..]);
+    }
+}
+
+/// [`rnea_joint_torques_from_kinematics`]'s legs in lanes where the model's
+/// shape and the CPU allow (then `true`), as [`rnea_bodies`] dispatches.
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn rnea_joint_torques_in_lanes(
+    model: &Model,
+    data: &Data,
+    v: &[f64],
+    a: &[f64],
+    a0: Motion,
+    tau_joints: &mut [f64],
+) -> bool {
+    multiversion::target::match_target! {
+        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
+            && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
+        {
+            crate::leg_lanes::rnea_joint_torques_legs(model, plan, data, v, a, a0, tau_joints);
+            return true;
+        },
+        _ => {},
+    }
+    let _ = (model, data, v, a, a0, tau_joints);
+    false
+}
+
 /// RNEA's two passes over the bodies after the base's (its acceleration and
 /// own force set; the children's forces are added to it here), compiled for
 /// x86-64-v3 (AVX2, FMA) and the generic target with the CPU's choice at the

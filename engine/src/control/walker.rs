@@ -367,7 +367,7 @@ pub struct Walker {
     qd_des: Vec<f64>,
     /// Generalized accelerations for the inverse dynamics (base rows zero).
     acc: Vec<f64>,
-    /// Inverse-dynamics generalized forces of the last tick (all rows).
+    /// Inverse-dynamics joint torques of the last tick (the joint rows).
     tau_id: Vec<f64>,
     leg_q: Vec<f64>,
     leg_qd: Vec<f64>,
@@ -469,7 +469,7 @@ impl Walker {
             last_contact_z: [f64::NAN; MAX_FEET],
             qd_des: vec![0.0; nj],
             acc: vec![0.0; model.nv],
-            tau_id: vec![0.0; model.nv],
+            tau_id: vec![0.0; nj],
             leg_q: vec![0.0; 4],
             leg_qd: vec![0.0; 4],
             leg_q2: vec![0.0; 4],
@@ -809,8 +809,13 @@ impl Walker {
 
         // 4. inverse dynamics with the base held still
         //    (the kinematics at (q, v) are in `data` since the tick began)
-        crate::rnea::rnea_from_kinematics(model, data, v, &self.acc, false);
-        self.tau_id.copy_from_slice(&data.tau);
+        crate::rnea::rnea_joint_torques_from_kinematics(
+            model,
+            data,
+            v,
+            &self.acc,
+            &mut self.tau_id,
+        );
         // 5. virtual wrench (the swing legs' reaction is not added: feeding
         //    the base rows of τ_id to the QP made quad16 fall even in place —
         //    the moment about the support diagonal is not realizable)
@@ -927,7 +932,7 @@ impl Walker {
         for ((t, lim), h) in tau_joints
             .iter_mut()
             .zip(&model.effort_limit[nv0..])
-            .zip(&self.tau_id[nv0..])
+            .zip(&self.tau_id)
         {
             *t = (*t + h).clamp(-lim, *lim);
         }

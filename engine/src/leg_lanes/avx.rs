@@ -31,7 +31,7 @@ pub(crate) struct GroupStep {
     /// Each joint's index in q.
     idx_q: [usize; LEGS],
     /// Each joint's index in v.
-    idx_v: [usize; LEGS],
+    pub(super) idx_v: [usize; LEGS],
 }
 
 impl GroupStep {
@@ -141,7 +141,7 @@ fn gather_kinematics(grp: &[usize; LEGS], data: &Data) -> GroupKinematics {
 /// (reference frame) in lanes: from `data`'s lane cache when it holds them,
 /// else gathered from the per-body arrays that forward kinematics filled.
 #[inline(always)]
-fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+pub(super) fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
     if data.lanes.valid {
         let k = &data.lanes.groups[g];
         return (k.s, k.inertia, gather_motions(&data.vel, grp));
@@ -176,7 +176,7 @@ fn assert_joints_within(idx: &[usize; LEGS], nv: usize) {
 }
 
 #[inline(always)]
-fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
+pub(super) fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
     F4::from_array([x[idx[0]], x[idx[1]], x[idx[2]], x[idx[3]]])
 }
 

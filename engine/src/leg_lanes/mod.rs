@@ -21,6 +21,8 @@
 #[cfg(target_arch = "x86_64")]
 mod avx;
 #[cfg(target_arch = "x86_64")]
+mod rnea_joints;
+#[cfg(target_arch = "x86_64")]
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
@@ -28,6 +30,8 @@ pub(crate) use avx::{
     GroupKinematics, GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, poses_legs,
     reserve_workspace, rnea_passes_legs,
 };
+#[cfg(target_arch = "x86_64")]
+pub(crate) use rnea_joints::rnea_joint_torques_legs;
 
 use crate::model::{JointType, Model};
 
@@ -432,6 +436,59 @@ mod tests {
                     outs.push(all);
                 }
                 assert_eq!(bits(&outs[0]), bits(&outs[1]), "{base:?} trial {trial}");
+            }
+        }
+    }
+
+    /// The joint-torque-only RNEA (the walker's) against the full RNEA's
+    /// joint rows, bit for bit, on the lanes' model and the general one, at
+    /// random states and accelerations (base rows zero, as the walker's, or
+    /// not).
+    #[test]
+    fn rnea_joint_torques_give_the_full_rneas_bits() {
+        use crate::rnea::{rnea_from_kinematics, rnea_joint_torques_from_kinematics};
+        for base in [BaseKind::Floating, BaseKind::Fixed] {
+            let (fast, general) = fast_and_general("quad16", base);
+            let mut r = ChaCha8Rng::seed_from_u64(12);
+            for trial in 0..100 {
+                let mut q = fast.neutral_q();
+                let nb = fast.base_nq();
+                for x in &mut q[nb..] {
+                    *x = r.random_range(-3.0..3.0);
+                }
+                if fast.is_floating() {
+                    q[..3].copy_from_slice(&[r.random_range(-5.0..5.0), 0.3, 0.5]);
+                    let rot = DQuat::from_euler(
+                        glam::EulerRot::ZYX,
+                        r.random_range(-3.0..3.0),
+                        r.random_range(-0.5..0.5),
+                        r.random_range(-0.5..0.5),
+                    );
+                    q[3..7].copy_from_slice(&[rot.x, rot.y, rot.z, rot.w]);
+                }
+                let v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
+                let base_rows_zero = trial % 2 == 0;
+                let nv0 = fast.base_nv();
+                let a: Vec<f64> = (0..fast.nv)
+                    .map(|k| {
+                        if (base_rows_zero && k < nv0) || k % 3 == 0 {
+                            0.0
+                        } else {
+                            r.random_range(-40.0..40.0)
+                        }
+                    })
+                    .collect();
+                for m in [&fast, &general] {
+                    let mut d = Data::new(m);
+                    forward_kinematics(m, &mut d, &q, &v);
+                    rnea_from_kinematics(m, &mut d, &v, &a, false);
+                    let full = d.tau[nv0..].to_vec();
+                    let mut d = Data::new(m);
+                    forward_kinematics(m, &mut d, &q, &v);
+                    let mut joints = vec![f64::NAN; m.nv - nv0];
+                    rnea_joint_torques_from_kinematics(m, &mut d, &v, &a, &mut joints);
+                    assert_eq!(bits(&joints), bits(&full), "{base:?} trial {trial}");
+                }
             }
         }
     }
