@@ -66,7 +66,7 @@ pub fn rnea_joint_torques_from_kinematics(
     let mut a0 = Motion::new(-model.gravity, glam::DVec3::ZERO);
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
-            a0 += data.s_base[k] * a[k];
+            a0 += data.base_subspace(k) * a[k];
         }
     }
     if !rnea_joint_torques_in_lanes(model, data, v, a, a0, tau_joints) {
