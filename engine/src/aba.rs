@@ -62,9 +62,9 @@ fn aba_passes(
     // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
     multiversion::target::match_target! {
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
-            return crate::leg_lanes::aba_passes_legs(
+            return crate::leg_lanes::avx_call!(crate::leg_lanes::aba_passes_legs(
                 model, plan, data, v, tau, use_external, body_acc,
-            );
+            ));
         },
         _ => {},
     }

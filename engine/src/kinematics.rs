@@ -89,7 +89,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
     multiversion::target::match_target! {
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
-            crate::leg_lanes::poses_legs(plan, data, q, v);
+            crate::leg_lanes::avx_call!(crate::leg_lanes::poses_legs(plan, data, q, v));
             return;
         },
         _ => {},
@@ -184,9 +184,9 @@ pub fn leg_end_points(
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
             let base = base_pose(model, q);
             let vel0 = base_velocity_at(model, base.rot, v);
-            return Some(crate::leg_lanes::leg_end_points(
+            return Some(crate::leg_lanes::avx_call!(crate::leg_lanes::leg_end_points(
                 plan, &base, base.trans, vel0, q, v, points,
-            ));
+            )));
         },
         _ => {},
     }

@@ -90,7 +90,7 @@ fn rnea_joint_torques_in_lanes(
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
             && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
         {
-            crate::leg_lanes::rnea_joint_torques_legs(model, plan, data, v, a, a0, tau_joints);
+            crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_joint_torques_legs(model, plan, data, v, a, a0, tau_joints));
             return true;
         },
         _ => {},
@@ -111,7 +111,7 @@ fn rnea_bodies(model: &Model, data: &mut Data, v: &[f64], a: &[f64], use_externa
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
             && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
         {
-            return crate::leg_lanes::rnea_passes_legs(model, plan, data, v, a, use_external);
+            return crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_passes_legs(model, plan, data, v, a, use_external));
         },
         _ => {},
     }

@@ -265,7 +265,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
 #[multiversion(targets("x86_64+avx2+fma"))]
 pub fn sin_cos_x4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
     multiversion::target::match_target! {
-        "x86_64+avx2+fma" => crate::leg_lanes::sin_cos_avx(x),
+        "x86_64+avx2+fma" => crate::leg_lanes::avx_call!(crate::leg_lanes::sin_cos_avx(x)),
         _ => sin_cos_lanes(x),
     }
 }

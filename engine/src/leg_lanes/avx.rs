@@ -141,7 +141,11 @@ fn gather_kinematics(grp: &[usize; LEGS], data: &Data) -> GroupKinematics {
 /// (reference frame) in lanes: from `data`'s lane cache when it holds them,
 /// else gathered from the per-body arrays that forward kinematics filled.
 #[inline(always)]
-pub(super) fn group_kinematics(g: usize, grp: &[usize; LEGS], data: &Data) -> (Motion4, Inertia4, Motion4) {
+pub(super) fn group_kinematics(
+    g: usize,
+    grp: &[usize; LEGS],
+    data: &Data,
+) -> (Motion4, Inertia4, Motion4) {
     if data.lanes.valid {
         let k = &data.lanes.groups[g];
         return (k.s, k.inertia, gather_motions(&data.vel, grp));

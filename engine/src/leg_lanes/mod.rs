@@ -18,6 +18,27 @@
 //! code needs AVX); other CPUs and architectures run the general path, with
 //! the same bits.
 
+/// Calls one of this module's AVX functions from a `match_target!` arm for
+/// `"x86_64+avx2+fma"`. In the portable build that arm runs inside
+/// multiversion's x86-64-v3 clone, where the call is safe. A build for a CPU
+/// with AVX2 and FMA (`RUSTFLAGS="-C target-cpu=native"` or `x86-64-v3`)
+/// skips the dispatch and runs the arm in a function without
+/// `#[target_feature]`, where Rust still asks for `unsafe`, although that
+/// binary cannot run on a CPU without those features.
+macro_rules! avx_call {
+    ($call:expr) => {{
+        // SAFETY: the build's static target features include AVX2 and FMA,
+        // so every CPU it runs on has the AVX these functions need.
+        #[cfg(all(target_feature = "avx2", target_feature = "fma"))]
+        #[allow(unsafe_code, unused_unsafe)]
+        let r = unsafe { $call };
+        #[cfg(not(all(target_feature = "avx2", target_feature = "fma")))]
+        let r = $call;
+        r
+    }};
+}
+pub(crate) use avx_call;
+
 #[cfg(target_arch = "x86_64")]
 mod avx;
 #[cfg(target_arch = "x86_64")]
