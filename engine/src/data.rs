@@ -218,11 +218,7 @@ impl Data {
     #[inline(always)]
     pub fn body_inertia(&self, model: &Model, i: usize) -> RigidInertia {
         #[cfg(target_arch = "x86_64")]
-        if self.lanes.valid
-            && let Some(plan) = &model.leg_lanes
-            && let Some(&(g, k)) = plan.slot.get(i)
-            && g != usize::MAX
-        {
+        if let Some((g, k)) = self.cached_lane(model, i) {
             return self.lanes.groups[g].inertia_lane(k);
         }
         self.inertia_ref[i]
@@ -235,14 +231,26 @@ impl Data {
     #[inline(always)]
     pub fn subspace(&self, model: &Model, i: usize) -> Motion {
         #[cfg(target_arch = "x86_64")]
+        if let Some((g, k)) = self.cached_lane(model, i) {
+            return self.lanes.groups[g].s_lane(k);
+        }
+        self.s[i]
+    }
+
+    /// Body `i`'s (group, lane) in the lane cache while the cache holds the
+    /// kinematics forward kinematics left there only; `None` for the base,
+    /// for a model without legs in lanes, or when the cache is stale.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn cached_lane(&self, model: &Model, i: usize) -> Option<(usize, usize)> {
         if self.lanes.valid
             && let Some(plan) = &model.leg_lanes
             && let Some(&(g, k)) = plan.slot.get(i)
             && g != usize::MAX
         {
-            return self.lanes.groups[g].s_lane(k);
+            return Some((g, k));
         }
-        self.s[i]
+        None
     }
 
     /// Column `k` (0..6, for `v[k]`) of the free base's motion subspace,

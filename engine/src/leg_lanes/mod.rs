@@ -243,6 +243,20 @@ mod tests {
         ]);
     }
 
+    /// `model`'s neutral `q` with every joint within ±3 rad and, on a
+    /// floating base, the base at a random x within ±5 m (y 0.3, z 0.5 m).
+    fn random_joints_and_x(model: &Model, r: &mut ChaCha8Rng) -> Vec<f64> {
+        let mut q = model.neutral_q();
+        let nb = model.base_nq();
+        for x in &mut q[nb..] {
+            *x = r.random_range(-3.0..3.0);
+        }
+        if model.is_floating() {
+            q[..3].copy_from_slice(&[r.random_range(-5.0..5.0), 0.3, 0.5]);
+        }
+        q
+    }
+
     /// The built-in `name` on `base` (legs in lanes where its shape allows)
     /// and the same model on the general path (`leg_lanes = None`).
     fn fast_and_general(name: &str, base: BaseKind) -> (Model, Model) {
@@ -423,14 +437,7 @@ mod tests {
             assert!(fast.leg_lanes.is_some());
             let mut r = ChaCha8Rng::seed_from_u64(11);
             for trial in 0..50 {
-                let mut q = fast.neutral_q();
-                let nb = fast.base_nq();
-                for x in &mut q[nb..] {
-                    *x = r.random_range(-3.0..3.0);
-                }
-                if fast.is_floating() {
-                    q[..3].copy_from_slice(&[r.random_range(-5.0..5.0), 0.3, 0.5]);
-                }
+                let q = random_joints_and_x(&fast, &mut r);
                 let v: Vec<f64> = (0..fast.nv).map(|_| r.random_range(-4.0..4.0)).collect();
                 // zeros in some rows, as the walker's base and stance legs have
                 let a: Vec<f64> = (0..fast.nv)
@@ -472,13 +479,8 @@ mod tests {
             let (fast, general) = fast_and_general("quad16", base);
             let mut r = ChaCha8Rng::seed_from_u64(12);
             for trial in 0..100 {
-                let mut q = fast.neutral_q();
-                let nb = fast.base_nq();
-                for x in &mut q[nb..] {
-                    *x = r.random_range(-3.0..3.0);
-                }
+                let mut q = random_joints_and_x(&fast, &mut r);
                 if fast.is_floating() {
-                    q[..3].copy_from_slice(&[r.random_range(-5.0..5.0), 0.3, 0.5]);
                     let rot = DQuat::from_euler(
                         glam::EulerRot::ZYX,
                         r.random_range(-3.0..3.0),
