@@ -154,9 +154,9 @@ impl F4 {
     /// `sincos`): [`crate::trig::sin_cos_lanes`]' operations, each one AVX
     /// instruction (that function's plain-Rust lane loops do not all
     /// vectorise); lanes that need libm's second reduction round or large
-    /// argument path call it. Not inlined: inlined into the pose loops'
-    /// rotation (`avx::rotate_about_axis!`), it made them larger and no
-    /// faster.
+    /// argument path call it. Not inlined (a large body; with `#[inline]`
+    /// LLVM kept it out of line from the pose loops too), so the pose loops
+    /// around `avx::rotate_about_axis!` stay small.
     #[inline(never)]
     #[target_feature(enable = "avx")]
     pub fn sin_cos(self) -> (Self, Self) {
