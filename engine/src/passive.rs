@@ -126,7 +126,9 @@ pub fn saturate(model: &Model, params: &PassiveParams, tau_actuator: &[f64], tau
 /// Adds the passive joint torques at `(q, v)` into `tau` (nv): damping,
 /// friction and soft limits as switched on in `params`, and always the
 /// model's joint springs (compliant payloads' spring–dampers, see
-/// [`spring_torques`]). The base is untouched.
+/// [`spring_torques`]). The base is untouched. (An x86-64-v3 clone: no
+/// fused multiply–add, so the same bits.)
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn add_passive_torques(
     model: &Model,
     params: &PassiveParams,

@@ -409,7 +409,10 @@ fn tangential_force(
 /// Adds every contact's force to `data.f_ext` at the stage state held in
 /// `data` (after [`crate::kinematics::forward_kinematics`]). Pure in the
 /// persistent state: call it at every RK4 stage. `out`, when given (same
-/// length as `points`), receives each evaluation.
+/// length as `points`), receives each evaluation. (Its x86-64-v3 clone,
+/// with [`cached_force`] forced inline into it, spares register copies; no
+/// fused multiply–add, so both give the same bits.)
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn contact_forces(
     points: &[ContactPoint],
     model: &Model,
@@ -441,7 +444,7 @@ pub fn contact_forces(
 
 /// The update's [`CachedForce`] of `state` when `data` holds the inputs it
 /// was found at: `Some(None)` no contact, `Some(Some(f))` add `f`.
-#[inline]
+#[inline(always)]
 fn cached_force(point: &ContactPoint, data: &Data, state: &ContactState) -> Option<Option<Force>> {
     let (Some(q), Some(c)) = (&state.last_query, &state.last_force) else {
         return None;

@@ -4,9 +4,7 @@
 
 use super::LEGS;
 use super::LegLanes;
-use super::x4::{
-    F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer, rotate_about_axis,
-};
+use super::x4::{F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer};
 use crate::data::Data;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
@@ -184,6 +182,32 @@ pub(super) fn gather(x: &[f64], idx: &[usize; LEGS]) -> F4 {
     F4::from_array([x[idx[0]], x[idx[1]], x[idx[2]], x[idx[3]]])
 }
 
+/// `rot · R_k(angle)` as the scalar kinematics' fast path computes it: only
+/// the two columns across axis `k` change. A macro, not a function: as an
+/// `#[inline]` AVX function (Rust refuses `#[inline(always)]` with
+/// `#[target_feature]`) LLVM inlined it into the pose loops or not
+/// depending on unrelated code elsewhere in the crate, and out of line it
+/// cost forward kinematics about 110 and `leg_end_points` about 47
+/// instructions a step.
+macro_rules! rotate_about_axis {
+    ($rot:expr, $k:expr, $angle:expr) => {{
+        let (rot, k, angle): (M3, usize, F4) = ($rot, $k, $angle);
+        // `trig::kinematics_sin_cos` per lane
+        let (s, c) = if crate::trig::DYNAMICS_USE_LIBM {
+            angle.sin_cos()
+        } else {
+            let (s, c) = crate::trig::kinematics_sin_cos_lanes(angle.to_array());
+            (F4::from_array(s), F4::from_array(c))
+        };
+        let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
+        match k {
+            0 => M3::from_cols(x, y.scale(c).add(z.scale(s)), z.scale(c).sub(y.scale(s))),
+            1 => M3::from_cols(x.scale(c).sub(z.scale(s)), y, z.scale(c).add(x.scale(s))),
+            _ => M3::from_cols(x.scale(c).add(y.scale(s)), y.scale(c).sub(x.scale(s)), z),
+        }
+    }};
+}
+
 /// One group's pose `x`, its origin relative to the reference point `r` and
 /// its motion subspace `s` (reference frame), from the parents' poses `xp`
 /// (`kinematics::poses`, statement for statement). A macro, not a function:
@@ -205,7 +229,7 @@ macro_rules! group_pose {
         let qi = gather($q, &st.idx_q);
         let col = rot_j.col(st.axis);
         let x = Transform4::new(
-            rotate_about_axis(rot_j, st.axis, F4::splat(st.sign).mul(qi)),
+            rotate_about_axis!(rot_j, st.axis, F4::splat(st.sign).mul(qi)),
             trans_j,
         );
         let aw = if st.sign > 0.0 { col } else { col.neg() };

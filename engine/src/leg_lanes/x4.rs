@@ -154,10 +154,9 @@ impl F4 {
     /// `sincos`): [`crate::trig::sin_cos_lanes`]' operations, each one AVX
     /// instruction (that function's plain-Rust lane loops do not all
     /// vectorise); lanes that need libm's second reduction round or large
-    /// argument path call it. Not inlined: inlined into
-    /// [`rotate_about_axis`], that grew past LLVM's inlining threshold and
-    /// was called out of line from the pose loops instead (about 100
-    /// instructions a step more).
+    /// argument path call it. Not inlined (a large body; with `#[inline]`
+    /// LLVM kept it out of line from the pose loops too), so the pose loops
+    /// around `avx::rotate_about_axis!` stay small.
     #[inline(never)]
     #[target_feature(enable = "avx")]
     pub fn sin_cos(self) -> (Self, Self) {
@@ -746,25 +745,5 @@ impl Sym6x4 {
             lin: self.m.mul_vec3(v.lin).add(ht_w),
             ang: self.h.mul_vec3(v.lin).add(self.i.mul_vec3(v.ang)),
         }
-    }
-}
-
-/// `rot · R_k(angle)` as the scalar kinematics' fast path computes it: only
-/// the two columns across axis `k` change.
-#[inline]
-#[target_feature(enable = "avx")]
-pub fn rotate_about_axis(rot: M3, k: usize, angle: F4) -> M3 {
-    // `trig::kinematics_sin_cos` per lane
-    let (s, c) = if crate::trig::DYNAMICS_USE_LIBM {
-        angle.sin_cos()
-    } else {
-        let (s, c) = crate::trig::kinematics_sin_cos_lanes(angle.to_array());
-        (F4::from_array(s), F4::from_array(c))
-    };
-    let (x, y, z) = (rot.x_axis, rot.y_axis, rot.z_axis);
-    match k {
-        0 => M3::from_cols(x, y.scale(c).add(z.scale(s)), z.scale(c).sub(y.scale(s))),
-        1 => M3::from_cols(x.scale(c).sub(z.scale(s)), y, z.scale(c).add(x.scale(s))),
-        _ => M3::from_cols(x.scale(c).add(y.scale(s)), y.scale(c).sub(x.scale(s)), z),
     }
 }
