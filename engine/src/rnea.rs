@@ -25,14 +25,7 @@ pub fn rnea_from_kinematics(
     a: &[f64],
     use_external: bool,
 ) {
-    // Gravity enters as a fictitious upward acceleration of the base (Featherstone §5.3).
-    let a_grav = Motion::new(-model.gravity, glam::DVec3::ZERO);
-    let mut a0 = a_grav;
-    if model.joint_type[0] == JointType::Free {
-        for k in 0..6 {
-            a0 += data.base_subspace(k) * a[k];
-        }
-    }
+    let a0 = base_acceleration(model, data, a);
     data.acc[0] = a0;
     data.f[0] = data.inertia_ref[0].mul_motion(a0)
         + data.vel[0].cross_force(data.inertia_ref[0].mul_motion(data.vel[0]));
@@ -45,6 +38,20 @@ pub fn rnea_from_kinematics(
             data.tau[k] = data.base_subspace(k).dot(data.f[0]);
         }
     }
+}
+
+/// The base's spatial acceleration RNEA starts from: gravity as a
+/// fictitious upward acceleration (Featherstone §5.3) plus, on a free base,
+/// its own acceleration `a[..6]` through the base's motion subspace.
+#[inline]
+fn base_acceleration(model: &Model, data: &Data, a: &[f64]) -> Motion {
+    let mut a0 = Motion::new(-model.gravity, glam::DVec3::ZERO);
+    if model.joint_type[0] == JointType::Free {
+        for k in 0..6 {
+            a0 += data.base_subspace(k) * a[k];
+        }
+    }
+    a0
 }
 
 /// The joint rows of [`rnea_from_kinematics`] without external forces,
@@ -62,13 +69,7 @@ pub fn rnea_joint_torques_from_kinematics(
 ) {
     let nv0 = model.base_nv();
     assert_eq!(tau_joints.len(), model.nv - nv0, "one torque per joint");
-    // the base's acceleration, as the full RNEA forms it
-    let mut a0 = Motion::new(-model.gravity, glam::DVec3::ZERO);
-    if model.joint_type[0] == JointType::Free {
-        for k in 0..6 {
-            a0 += data.base_subspace(k) * a[k];
-        }
-    }
+    let a0 = base_acceleration(model, data, a);
     if !rnea_joint_torques_in_lanes(model, data, v, a, a0, tau_joints) {
         rnea_from_kinematics(model, data, v, a, false);
         tau_joints.copy_from_slice(&data.tau[nv0..]);

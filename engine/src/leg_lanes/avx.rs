@@ -361,16 +361,9 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
 fn gather_forces(f: &[Force], grp: &[usize; LEGS]) -> Force4 {
     let [a, b, c, d] = *grp;
     let (fa, fb, fc, fd) = (&f[a], &f[b], &f[c], &f[d]);
-    let v3 = |p: [&DVec3; LEGS]| {
-        V3::new(
-            F4::from_array([p[0].x, p[1].x, p[2].x, p[3].x]),
-            F4::from_array([p[0].y, p[1].y, p[2].y, p[3].y]),
-            F4::from_array([p[0].z, p[1].z, p[2].z, p[3].z]),
-        )
-    };
     Force4::new(
-        v3([&fa.lin, &fb.lin, &fc.lin, &fd.lin]),
-        v3([&fa.ang, &fb.ang, &fc.ang, &fd.ang]),
+        gather_v3([&fa.lin, &fb.lin, &fc.lin, &fd.lin]),
+        gather_v3([&fa.ang, &fb.ang, &fc.ang, &fd.ang]),
     )
 }
 
