@@ -173,19 +173,25 @@ fn metrics(w: &World) -> Vec<(String, String)> {
 #[test]
 fn herd_stepped_block_by_block_equals_herd_stepped_stage_by_stage_bit_for_bit() {
     // blocks of 4 (the lane groups) and 8 on two threads against the
-    // stage-major layout on one; the herds have noisy sensors and the
-    // estimator on (the defaults), so the Sense stage is in the comparison
+    // stage-major layout on one; and blocks of one lane group (the default)
+    // with each robot whose legs run in lanes alone. The herds have noisy
+    // sensors and the estimator on (the defaults), so the Sense stage is in
+    // the comparison
     let mut stages = world(1, LaneBatching::AcrossRobots);
     stages.sim.world.insert_resource(StageLayout::StageMajor);
-    let mut blocks: Vec<World> = [4, 8]
-        .map(|robots| {
-            let mut w = world(2, LaneBatching::AcrossRobots);
-            w.sim
-                .world
-                .insert_resource(StageLayout::RobotBlocks { robots });
-            w
-        })
-        .into();
+    let mut blocks: Vec<World> = [
+        (4, LaneBatching::AcrossRobots),
+        (8, LaneBatching::AcrossRobots),
+        (1, LaneBatching::Auto),
+    ]
+    .map(|(robots, lanes)| {
+        let mut w = world(2, lanes);
+        w.sim
+            .world
+            .insert_resource(StageLayout::RobotBlocks { robots });
+        w
+    })
+    .into();
     for step in 0..600 {
         stages.sim.step();
         for b in &mut blocks {

@@ -216,9 +216,13 @@ pub enum StageLayout {
     },
 }
 
-/// Robots per block by default: eight quad16 (about 0.8 MiB of robot data)
-/// fit a core's 2 MiB L2 with room for the models and workspaces.
-pub const DEFAULT_BLOCK_ROBOTS: usize = 8;
+/// Robots per block by default: one lane group (one robot whose legs run in
+/// lanes, else four robots in lanes across robots). A pass takes a block
+/// through up to 64 steps, so one robot's data (about 63 KiB, less of it
+/// touched in a step) stays in the core's L1 and L2 through them; blocks of
+/// eight (about 0.5 MiB, in L2 only) were 2.5 % slower at 256 robots on one
+/// thread (paired runs, `quadsim bench --block-robots 1` vs `8`).
+pub const DEFAULT_BLOCK_ROBOTS: usize = 1;
 
 impl Default for StageLayout {
     /// Blocks of [`DEFAULT_BLOCK_ROBOTS`].
