@@ -57,9 +57,10 @@ fn base_acceleration(model: &Model, data: &Data, a: &[f64]) -> Motion {
 /// The joint rows of [`rnea_from_kinematics`] without external forces,
 /// `tau_joints[j − base_nv] = tau[j]` bit for bit, for a caller that reads
 /// only them (the walker's feed-forward): with the legs in lanes, neither
-/// the base's force and rows nor any body's `acc` and `f` are formed or
+/// the base's force and rows nor the legs' `acc` and `f` are formed or
 /// stored (about 40% of the pass). Otherwise the full RNEA runs. `data`'s
-/// `acc`, `f` and `tau` are then unspecified (not those of the full RNEA).
+/// `acc` (but the base's, which is the full RNEA's), `f` and `tau` are then
+/// unspecified (not those of the full RNEA).
 pub fn rnea_joint_torques_from_kinematics(
     model: &Model,
     data: &mut Data,
@@ -69,34 +70,34 @@ pub fn rnea_joint_torques_from_kinematics(
 ) {
     let nv0 = model.base_nv();
     assert_eq!(tau_joints.len(), model.nv - nv0, "one torque per joint");
-    let a0 = base_acceleration(model, data, a);
-    if !rnea_joint_torques_in_lanes(model, data, v, a, a0, tau_joints) {
+    data.acc[0] = base_acceleration(model, data, a);
+    if !rnea_joint_torques_in_lanes(model, data, v, a, tau_joints) {
         rnea_from_kinematics(model, data, v, a, false);
         tau_joints.copy_from_slice(&data.tau[nv0..]);
     }
 }
 
-/// [`rnea_joint_torques_from_kinematics`]'s legs in lanes where the model's
-/// shape and the CPU allow (then `true`), as [`rnea_bodies`] dispatches.
+/// [`rnea_joint_torques_from_kinematics`]'s legs in lanes, after the base's
+/// acceleration `data.acc[0]` is set, where the model's shape and the CPU
+/// allow (then `true`), as [`rnea_bodies`] dispatches.
 #[multiversion(targets("x86_64+avx2+fma"))]
 fn rnea_joint_torques_in_lanes(
     model: &Model,
-    data: &Data,
+    data: &mut Data,
     v: &[f64],
     a: &[f64],
-    a0: Motion,
     tau_joints: &mut [f64],
 ) -> bool {
     multiversion::target::match_target! {
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
             && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
         {
-            crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_joint_torques_legs(model, plan, data, v, a, a0, tau_joints));
+            crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_passes_legs::<false>(model, plan, data, v, a, false, tau_joints));
             return true;
         },
         _ => {},
     }
-    let _ = (model, data, v, a, a0, tau_joints);
+    let _ = (model, data, v, a, tau_joints);
     false
 }
 
@@ -112,7 +113,7 @@ fn rnea_bodies(model: &Model, data: &mut Data, v: &[f64], a: &[f64], use_externa
         "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
             && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
         {
-            return crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_passes_legs(model, plan, data, v, a, use_external));
+            return crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_passes_legs::<true>(model, plan, data, v, a, use_external, &mut []));
         },
         _ => {},
     }

@@ -198,6 +198,14 @@ impl ActiveSet {
             // those that may be added).
             let mut worst = -qp.tolerance;
             let mut candidate = None;
+            // constraint `i` (not blocked) with value `s`: the new candidate
+            // when more violated than every one before it (the first of equals)
+            let mut consider = |i: usize, s: f64| {
+                if s < worst {
+                    worst = s;
+                    candidate = Some(i);
+                }
+            };
             if feet {
                 let sums = self.foot_row_dots(n / 3);
                 for a in 0..n / 3 {
@@ -210,21 +218,14 @@ impl ActiveSet {
                             } else {
                                 s[a]
                             } - qp.b[i];
-                            if s < worst {
-                                worst = s;
-                                candidate = Some(i);
-                            }
+                            consider(i, s);
                         }
                     }
                 }
             } else {
                 for i in 0..m {
                     if !self.blocked[i] {
-                        let s = row_dot(qp, i, n, &self.x) - qp.b[i];
-                        if s < worst {
-                            worst = s;
-                            candidate = Some(i);
-                        }
+                        consider(i, row_dot(qp, i, n, &self.x) - qp.b[i]);
                     }
                 }
             }

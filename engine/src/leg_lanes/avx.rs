@@ -605,26 +605,41 @@ fn add_hips_into_base(ia0: &mut Sym6, pa0: &mut Force, term: &Sym6x4, pa: &Force
 pub(crate) const RNEA_MAX_GROUPS: usize = 8;
 
 /// RNEA's two passes over the legs (`rnea::rnea_from_kinematics`), after
-/// the base's acceleration `data.acc[0]` and force `data.f[0]` are set:
-/// fills the legs' `acc`, `f` and `tau` entries and adds the hips' forces
-/// to `data.f[0]` in decreasing body index (lane 3 first), as the general
-/// path's reverse loop does. `plan` has at most [`RNEA_MAX_GROUPS`] groups.
+/// the base's acceleration `data.acc[0]` is set. `plan` has at most
+/// [`RNEA_MAX_GROUPS`] groups.
+///
+/// With `FULL`, after the base's force `data.f[0]` is set too: fills the
+/// legs' `acc`, `f` and `tau` entries and adds the hips' forces to
+/// `data.f[0]` in decreasing body index (lane 3 first), as the general
+/// path's reverse loop does (`tau_joints` unused).
+///
+/// Without `FULL`, only the joint torques, for a caller that reads nothing
+/// else (the walker's feed-forward; `use_external` must be false): the same
+/// operations in the same order on the legs' forces, so the same bits, but
+/// no body's `acc` or `f` is stored and the hips' forces are not summed into
+/// the base's; each leg joint `j`'s torque goes to `tau_joints[j − base_nv]`.
+/// One function for both, the stores chosen at compile time, so that the
+/// passes cannot drift apart and neither pays for the other's branches.
 #[target_feature(enable = "avx")]
-pub(crate) fn rnea_passes_legs(
+pub(crate) fn rnea_passes_legs<const FULL: bool>(
     model: &Model,
     plan: &LegLanes,
     data: &mut Data,
     v: &[f64],
     a: &[f64],
     use_external: bool,
+    tau_joints: &mut [f64],
 ) {
     let n = model.nbodies;
     let nv = model.nv;
+    let nv0 = model.base_nv();
     let groups = &plan.groups[..];
     let ng = groups.len();
     assert!(ng <= RNEA_MAX_GROUPS, "legs within RNEA's lane workspace");
+    debug_assert!(FULL || !use_external, "external forces need the full RNEA");
     let armature = &model.armature[..nv];
     let (v, a) = (&v[..nv], &a[..nv]);
+    let tau_joints = &mut tau_joints[..if FULL { 0 } else { nv - nv0 }];
     let mut fs = [Force4::default(); RNEA_MAX_GROUPS];
     let mut ss = [Motion4::default(); RNEA_MAX_GROUPS];
     // Pass 1, hips to feet: acc = acc_p + S q̈ + v × S q̇, f = I acc + v ×* I v.
@@ -637,13 +652,15 @@ pub(crate) fn rnea_passes_legs(
         let mut f = inertia
             .mul_motion(acc)
             .add(vi.cross_force(inertia.mul_motion(vi)));
-        if use_external {
-            f = f.sub(Force4::from_lanes(grp.map(|i| data.f_ext[i])));
-        }
-        let accs = acc.lanes();
-        let acc_all = &mut data.acc[..n];
-        for k in 0..LEGS {
-            acc_all[grp[k]] = accs[k];
+        if FULL {
+            if use_external {
+                f = f.sub(Force4::from_lanes(grp.map(|i| data.f_ext[i])));
+            }
+            let accs = acc.lanes();
+            let acc_all = &mut data.acc[..n];
+            for k in 0..LEGS {
+                acc_all[grp[k]] = accs[k];
+            }
         }
         fs[g] = f;
         ss[g] = s;
@@ -653,23 +670,30 @@ pub(crate) fn rnea_passes_legs(
     // then τ = Sᵀ f + armature · q̈.
     let mut child: Option<Force4> = None;
     for g in (0..ng).rev() {
-        let (grp, st) = (&groups[g], &plan.steps[g]);
+        let (grp, idx_v) = (&groups[g], &plan.steps[g].idx_v);
         let mut f = fs[g];
         if let Some(c) = child {
             f = f.add(c);
         }
         let tau = ss[g]
             .dot(f)
-            .add(gather(armature, &st.idx_v).mul(gather(a, &st.idx_v)));
-        let (taus, fl) = (tau.to_array(), f.lanes());
-        let (tau_all, f_all) = (&mut data.tau[..nv], &mut data.f[..n]);
-        for k in 0..LEGS {
-            tau_all[st.idx_v[k]] = taus[k];
-            f_all[grp[k]] = fl[k];
+            .add(gather(armature, idx_v).mul(gather(a, idx_v)));
+        let taus = tau.to_array();
+        if FULL {
+            let fl = f.lanes();
+            let (tau_all, f_all) = (&mut data.tau[..nv], &mut data.f[..n]);
+            for k in 0..LEGS {
+                tau_all[idx_v[k]] = taus[k];
+                f_all[grp[k]] = fl[k];
+            }
+        } else {
+            for k in 0..LEGS {
+                tau_joints[idx_v[k] - nv0] = taus[k];
+            }
         }
         child = Some(f);
     }
-    if let Some(c) = child {
+    if FULL && let Some(c) = child {
         let fl = c.lanes();
         for k in (0..LEGS).rev() {
             data.f[0] += fl[k];

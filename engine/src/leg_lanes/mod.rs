@@ -42,8 +42,6 @@ pub(crate) use avx_call;
 #[cfg(target_arch = "x86_64")]
 mod avx;
 #[cfg(target_arch = "x86_64")]
-mod rnea_joints;
-#[cfg(target_arch = "x86_64")]
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
@@ -51,8 +49,6 @@ pub(crate) use avx::{
     GroupKinematics, GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, poses_legs,
     reserve_workspace, rnea_passes_legs,
 };
-#[cfg(target_arch = "x86_64")]
-pub(crate) use rnea_joints::rnea_joint_torques_legs;
 
 use crate::model::{JointType, Model};
 
