@@ -6,8 +6,9 @@
 //! so a herd larger than a core's cache is fetched from memory five times a
 //! step, and the thread pool is woken five times. Robots do not interact,
 //! so nothing requires a stage to finish for every robot before the next
-//! starts: here each worker takes a block of a few consecutive robots through
-//! all of them, in the schedule's order, while the block is in its cache.
+//! starts: here each worker takes a block of consecutive robots (by default
+//! one lane group: one robot whose legs run in lanes) through all of them,
+//! in the schedule's order, while the block is in its cache.
 //! Each robot meets exactly the calls, inputs and order of the stage-major
 //! layout, so both layouts give the same bits
 //! (`tests/batch_step.rs`).
@@ -63,7 +64,7 @@ impl PassSteps {
 /// counts them all.
 ///
 /// - [`StageLayout::RobotBlocks`] (the default, also for a world without
-///   the resource): each block of a few consecutive robots goes through all
+///   the resource): each block of consecutive robots goes through all
 ///   stages while it is in the core's cache: `Sense` ([`sense_robot`]),
 ///   `Control` ([`control_stage`]), `Contact` ([`observe_robot`]),
 ///   `Integrate` (each lane group stepped, as in
