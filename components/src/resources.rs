@@ -218,7 +218,7 @@ pub enum StageLayout {
 
 /// Robots per block by default: one lane group (one robot whose legs run in
 /// lanes, else four robots in lanes across robots). A pass takes a block
-/// through up to 64 steps, so one robot's data (about 63 KiB, less of it
+/// through up to 256 steps, so one robot's data (about 63 KiB, less of it
 /// touched in a step) stays in the core's L1 and L2 through them; blocks of
 /// eight (about 0.5 MiB, in L2 only) were 2.5 % slower at 256 robots on one
 /// thread (paired runs, `quadsim bench --block-robots 1` vs `8`).
