@@ -82,15 +82,6 @@ pub struct ActuatorSummary {
     pub max_time_share_at_envelope_limit: f64,
 }
 
-/// `peak.max(x)` for a `peak` that is never NaN: `x` when it is larger,
-/// else `peak` (a NaN `x` too), the same bits as [`f64::max`] here (no −0
-/// either: the peaks start at +0 and take non-negative values), in one
-/// instruction instead of `max`'s five (its NaN fix-up).
-#[inline(always)]
-fn max_of_peak(peak: f64, x: f64) -> f64 {
-    if x > peak { x } else { peak }
-}
-
 impl ActuatorStats {
     /// Statistics for joints with these limits (joint order).
     pub fn new(effort_limit: &[f64], velocity_limit: &[f64]) -> Self {
@@ -149,8 +140,8 @@ impl ActuatorStats {
                 .zip(effort)
             {
                 let t = tau.abs();
-                *peak_t = max_of_peak(*peak_t, t.min(*lim));
-                *peak_d = max_of_peak(*peak_d, t);
+                *peak_t = crate::metrics::max_of_peak(*peak_t, t.min(*lim));
+                *peak_d = crate::metrics::max_of_peak(*peak_d, t);
                 any_at_torque |= t >= *lim;
             }
             // joints without a speed (a short `qd`) are not at their speed limit

@@ -144,12 +144,12 @@ pub(super) fn group_kinematics(
     grp: &[usize; LEGS],
     data: &Data,
 ) -> (Motion4, Inertia4, Motion4) {
-    if data.lanes.valid {
-        let k = &data.lanes.groups[g];
-        return (k.s, k.inertia, gather_motions(&data.vel, grp));
-    }
-    let k = gather_kinematics(grp, data);
-    (k.s, k.inertia, gather_motions(&data.vel, grp))
+    let GroupKinematics { s, inertia } = if data.lanes.valid {
+        data.lanes.groups[g]
+    } else {
+        gather_kinematics(grp, data)
+    };
+    (s, inertia, gather_motions(&data.vel, grp))
 }
 
 /// What ABA's last pass needs of one group, kept from the inward pass (one
@@ -654,7 +654,7 @@ pub(crate) fn rnea_passes_legs<const FULL: bool>(
             .add(vi.cross_force(inertia.mul_motion(vi)));
         if FULL {
             if use_external {
-                f = f.sub(Force4::from_lanes(grp.map(|i| data.f_ext[i])));
+                f = f.sub(gather_forces(&data.f_ext, grp));
             }
             let accs = acc.lanes();
             let acc_all = &mut data.acc[..n];

@@ -269,6 +269,12 @@ impl V3 {
         )
     }
 
+    /// Lane `k`, element by element from memory (no AVX needed).
+    #[inline(always)]
+    pub fn lane(&self, k: usize) -> DVec3 {
+        DVec3::new(self.x.lane(k), self.y.lane(k), self.z.lane(k))
+    }
+
     /// The four lanes.
     #[inline(always)]
     pub fn lanes(&self) -> [DVec3; 4] {
@@ -518,8 +524,7 @@ macro_rules! spatial_ops {
             /// Lane `k`, element by element from memory (no AVX needed).
             #[inline(always)]
             pub fn lane(&self, k: usize) -> $scalar {
-                let v = |v: &V3| DVec3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
-                $scalar::new(v(&self.lin), v(&self.ang))
+                $scalar::new(self.lin.lane(k), self.ang.lane(k))
             }
 
             /// One value per lane.
@@ -650,12 +655,11 @@ impl Inertia4 {
     /// inlining, only the elements the caller uses are loaded).
     #[inline(always)]
     pub fn lane(&self, k: usize) -> RigidInertia {
-        let v = |v: &V3| DVec3::new(v.x.lane(k), v.y.lane(k), v.z.lane(k));
         let i = &self.inertia_com;
         RigidInertia::new(
             self.mass.lane(k),
-            v(&self.com),
-            DMat3::from_cols(v(&i.x_axis), v(&i.y_axis), v(&i.z_axis)),
+            self.com.lane(k),
+            DMat3::from_cols(i.x_axis.lane(k), i.y_axis.lane(k), i.z_axis.lane(k)),
         )
     }
 
