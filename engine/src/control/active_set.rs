@@ -485,7 +485,7 @@ impl Givens {
     /// sign making `c ≥ 0`); `None` when both are zero (nothing to rotate).
     #[inline(always)]
     fn zeroing(a: f64, b: f64) -> Option<(Givens, f64)> {
-        let h = a.hypot(b);
+        let h = crate::linalg::hypot(a, b);
         if h == 0.0 {
             return None;
         }

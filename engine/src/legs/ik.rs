@@ -297,8 +297,19 @@ pub(crate) fn two_link_links(
     };
     let gamma = bend_sign * cos_g.acos();
     let theta_b = wrap_angle(gamma - b.arg_rad + a.arg_rad);
-    let reach = wa + cmul(cis(theta_b), ub);
-    let theta_a = wrap_angle(arg(target) - arg(reach));
+    // The wrist the bent chain reaches, `wa + e^{iθb} ub`. With both links
+    // of nonzero length `e^{iθb} ub = e^{iγ} (wa/|wa|) |ub|`, and `e^{iγ}`
+    // is `(cos γ, sin γ)` from the law of cosines itself: no sine and cosine
+    // of θb (one libm call fewer per solve).
+    let reach = if denom > 0.0 {
+        let sin_g = bend_sign * ((1.0 - cos_g) * (1.0 + cos_g)).sqrt();
+        wa + cmul(DVec2::new(cos_g, sin_g), wa) * (lb / la)
+    } else {
+        wa + cmul(cis(theta_b), ub)
+    };
+    // θa = arg target − arg reach, as one argument: `arg(target · conj(reach))`
+    // (one `atan2` fewer per solve)
+    let theta_a = wrap_angle(arg(cmul(target, DVec2::new(reach.x, -reach.y))));
     Ok((theta_a, theta_b, out))
 }
 

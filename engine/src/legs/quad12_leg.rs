@@ -196,7 +196,7 @@ impl Quad12Leg {
         }
         let p = self.mount_inv.transform_point(target_m);
         let d = self.offset_m;
-        let rho = p.x.hypot(p.y);
+        let rho = crate::linalg::hypot(p.x, p.y);
         let inside = rho < d.abs();
         if inside && !clamp {
             return Err(IkError::InsideOffset {

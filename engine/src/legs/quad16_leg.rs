@@ -252,7 +252,7 @@ impl Quad16Leg {
         }
         let p = self.mount_inv.transform_point(target_m);
         let d = self.offset_m;
-        let r = p.y.hypot(p.z);
+        let r = crate::linalg::hypot(p.y, p.z);
         let inside = r < d.abs();
         if inside && !clamp {
             return Err(IkError::InsideOffset {
