@@ -35,6 +35,7 @@
 //! 18×18 matrix (the update was the estimator's largest cost).
 
 use glam::DVec3;
+use multiversion::multiversion;
 use nalgebra::{SMatrix, SVector};
 
 /// Number of feet the filter carries.
@@ -237,34 +238,56 @@ impl BaseKf {
     /// its position; on a stance foot, the base velocity (unless the gate
     /// rejects it) and its height.
     pub fn update(&mut self, feet: &[FootMeasurement]) {
-        let kp = self.params;
-        let rp = kp.foot_position_std_m.powi(2);
-        let rv = kp.foot_velocity_std_mps.powi(2);
-        let rh = kp.foot_height_std_m.powi(2);
-        let (p_xy, p_z) = (&mut self.p_xy, &mut self.p_z);
-        let [x, y, z] = &mut self.x;
-        for (i, m) in feet.iter().take(KF_FEET).enumerate() {
-            let f = 2 + i;
-            let r = m.relative_position_m;
-            measure(p_xy, [&mut *x, &mut *y], f, Some(0), [r.x, r.y], rp);
-            measure(p_z, [&mut *z], f, Some(0), [r.z], rp);
-            if m.stance {
-                // a slipping or still-landing foot moves: reject its velocity
-                // when the innovation is beyond the gate (χ² with 3 dof)
-                let zv = -m.relative_velocity_mps;
-                let var = [p_xy[V][V], p_xy[V][V], p_z[V][V]];
-                let v = [x[V], y[V], z[V]];
-                let mut chi2 = 0.0;
-                for k in 0..3 {
-                    let d = zv[k] - v[k];
-                    chi2 += d * d / (var[k] + rv);
-                }
-                if kp.velocity_gate_chi2 <= 0.0 || chi2 <= kp.velocity_gate_chi2 {
-                    measure(p_xy, [&mut *x, &mut *y], V, None, [zv.x, zv.y], rv);
-                    measure(p_z, [&mut *z], V, None, [zv.z], rv);
-                }
-                measure(p_z, [&mut *z], f, None, [m.ground_height_m], rh);
+        update_feet(self, feet);
+    }
+}
+
+/// [`BaseKf::update`]'s body, compiled for x86-64-v3 (AVX2; the covariance
+/// rows four entries to a register) and the generic target, the CPU's
+/// choice at the first call; no fused multiply–add, so both give the same
+/// bits. A free function: multiversion takes no `self`.
+#[multiversion(targets("x86_64+avx2+fma"))]
+fn update_feet(kf: &mut BaseKf, feet: &[FootMeasurement]) {
+    update_feet_body(kf, feet);
+}
+
+/// [`update_feet`] compiled for the build's generic target only: for the
+/// test that every clone gives the same bits.
+#[cfg(test)]
+#[inline(never)]
+fn update_feet_generic(kf: &mut BaseKf, feet: &[FootMeasurement]) {
+    update_feet_body(kf, feet);
+}
+
+#[inline(always)]
+fn update_feet_body(kf: &mut BaseKf, feet: &[FootMeasurement]) {
+    let kp = kf.params;
+    let rp = kp.foot_position_std_m.powi(2);
+    let rv = kp.foot_velocity_std_mps.powi(2);
+    let rh = kp.foot_height_std_m.powi(2);
+    let (p_xy, p_z) = (&mut kf.p_xy, &mut kf.p_z);
+    let [x, y, z] = &mut kf.x;
+    for (i, m) in feet.iter().take(KF_FEET).enumerate() {
+        let f = 2 + i;
+        let r = m.relative_position_m;
+        measure(p_xy, [&mut *x, &mut *y], f, Some(0), [r.x, r.y], rp);
+        measure(p_z, [&mut *z], f, Some(0), [r.z], rp);
+        if m.stance {
+            // a slipping or still-landing foot moves: reject its velocity
+            // when the innovation is beyond the gate (χ² with 3 dof)
+            let zv = -m.relative_velocity_mps;
+            let var = [p_xy[V][V], p_xy[V][V], p_z[V][V]];
+            let v = [x[V], y[V], z[V]];
+            let mut chi2 = 0.0;
+            for k in 0..3 {
+                let d = zv[k] - v[k];
+                chi2 += d * d / (var[k] + rv);
             }
+            if kp.velocity_gate_chi2 <= 0.0 || chi2 <= kp.velocity_gate_chi2 {
+                measure(p_xy, [&mut *x, &mut *y], V, None, [zv.x, zv.y], rv);
+                measure(p_z, [&mut *z], V, None, [zv.z], rv);
+            }
+            measure(p_z, [&mut *z], f, None, [m.ground_height_m], rh);
         }
     }
 }
@@ -276,7 +299,7 @@ impl BaseKf {
 /// with `g = u / √s` (the dense `P − K h P`; entry by entry `P_ij − g_i g_j`,
 /// whose product commutes, so `P` stays symmetric bit for bit). Skipped
 /// when `s` is not a positive finite number.
-#[inline]
+#[inline(always)]
 fn measure<const L: usize>(
     p: &mut AxisCov,
     xs: [&mut [f64; AXIS_N]; L],
@@ -528,6 +551,33 @@ mod tests {
             }
         }
         assert!(kf.state().iter().all(|x| x.is_finite()));
+    }
+
+    /// The generic build and the clone the machine dispatches to (x86-64-v3
+    /// where the CPU has AVX2) give the same bits, over a run of
+    /// predictions and updates.
+    #[test]
+    fn every_clone_gives_the_same_bits() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let mut kf = BaseKf::new(KfParams::default(), DVec3::ZERO, DVec3::ZERO, &quad_feet());
+        let mut generic = kf.clone();
+        for step in 0..2_000 {
+            let feet = random_feet(&mut rng, &kf);
+            let stance: Vec<bool> = feet.iter().map(|f| f.stance).collect();
+            let a = DVec3::new(0.3, -0.2, rng.random_range(-1.0..1.0));
+            kf.predict(a, &stance, 0.002);
+            generic.predict(a, &stance, 0.002);
+            kf.update(&feet);
+            update_feet_generic(&mut generic, &feet);
+            let bits = |k: &BaseKf| -> Vec<u64> {
+                k.state()
+                    .iter()
+                    .chain(k.covariance().iter())
+                    .map(|v| v.to_bits())
+                    .collect()
+            };
+            assert_eq!(bits(&kf), bits(&generic), "step {step}");
+        }
     }
 
     /// A measurement whose innovation variance is not positive (a broken
