@@ -43,6 +43,7 @@ use crate::gait::placement::{PlacementInput, PlacementParams, foot_target_world,
 use crate::gait::scheduler::{GaitScheduler, LegPhase, SchedulerParams};
 use crate::gait::swing::ReachDown;
 use crate::gait::{Gait, GaitError};
+use crate::leg_lanes::{Quad16Legs, legs_ik};
 use crate::legs::ik::IkOptions;
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
@@ -337,12 +338,28 @@ struct LegInfo {
     dof: usize,
 }
 
+/// quad16's four legs in lanes for the leg IK, when `legs` are four quad16
+/// legs.
+fn quad16_legs_in_lanes(legs: &[LegKinematics]) -> Option<Quad16Legs> {
+    let legs: Vec<_> = legs
+        .iter()
+        .filter_map(|l| match l {
+            LegKinematics::Quad16(l) => Some(l),
+            LegKinematics::Quad12(_) => None,
+        })
+        .collect();
+    Quad16Legs::new(legs.try_into().ok()?)
+}
+
 /// The walking controller of one robot (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Walker {
     /// Parameters.
     pub params: WalkerParams,
     legs: Vec<LegKinematics>,
+    /// quad16's four legs in SIMD lanes for the tick's leg IK (`None` for
+    /// other legs): the same angles as the legs' own solves, bit for bit.
+    legs_in_lanes: Option<Box<Quad16Legs>>,
     /// Per leg: foot frame, the placed point in it, joint q and v indices, DOF.
     leg_info: Vec<LegInfo>,
     scheduler: GaitScheduler,
@@ -460,6 +477,7 @@ impl Walker {
             ),
             qp: ForceQp::new(params.qp),
             scheduler,
+            legs_in_lanes: quad16_legs_in_lanes(&legs).map(Box::new),
             legs,
             leg_info,
             q_des: vec![0.0; nj],
@@ -727,12 +745,17 @@ impl Walker {
             DVec3::new(p_base.x, p_base.y, ground_z + target_height),
         );
         self.acc.fill(0.0);
+        // Each leg's reference (target, velocity, acceleration; base frame)
+        // and the target of its second solve this tick: a swing leg's
+        // reference a step ε ahead (the feed-forward's forward difference),
+        // a stance leg's foot where it stands (the level ankle, step 8).
+        const EPS_S: f64 = 1e-3;
+        let mut refs = [(DVec3::ZERO, DVec3::ZERO, DVec3::ZERO); MAX_FEET];
+        let mut second = [DVec3::ZERO; MAX_FEET];
         for i in 0..nl {
-            let leg = &self.legs[i];
-            let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
             let state = self.scheduler.leg(i);
             let swing = state.phase == LegPhase::Swing;
-            let (target_body, vel_body, acc_body) = if swing {
+            refs[i] = if swing {
                 let r = state.swing_reference(self.params.lift_height_m, &self.params.reach);
                 if self.params.swing_in_level_frame {
                     let rel = r.pos_m - planned_base.trans;
@@ -758,12 +781,49 @@ impl Walker {
                     DVec3::ZERO,
                 )
             };
+            let (target_body, vel_body, acc_body) = refs[i];
+            second[i] = if swing {
+                target_body + vel_body * EPS_S + 0.5 * acc_body * EPS_S * EPS_S
+            } else {
+                rot.transpose() * (self.feet_world[i] - p_base)
+            };
+        }
+        // quad16: both solves of the four legs in lanes (the legs' own
+        // solves' angles, bit for bit; `None` without lanes). A solve fails
+        // only on a target that is not finite.
+        let (lanes_first, lanes_second) = match &self.legs_in_lanes {
+            Some(lanes) => {
+                let first = std::array::from_fn(|i| refs[i].0);
+                let second = std::array::from_fn(|i| second[i]);
+                (
+                    legs_ik(lanes, &first, &self.params.ik),
+                    legs_ik(lanes, &second, &self.params.ik),
+                )
+            }
+            None => (None, None),
+        };
+        let solve = |leg: &LegKinematics,
+                     lanes: Option<&[[f64; 4]; 4]>,
+                     i: usize,
+                     target: DVec3,
+                     out: &mut [f64]| {
+            match lanes {
+                Some(a) if target.is_finite() => {
+                    out.copy_from_slice(&a[i][..out.len()]);
+                    true
+                }
+                Some(_) => false,
+                None => leg.ik_clamped_into(target, &self.params.ik, out).is_ok(),
+            }
+        };
+        for i in 0..nl {
+            let leg = &self.legs[i];
+            let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
+            let swing = self.scheduler.leg(i).phase == LegPhase::Swing;
+            let (target_body, vel_body, acc_body) = refs[i];
             let leg_q = &mut self.leg_q[..dof];
             let leg_qd = &mut self.leg_qd[..dof];
-            if leg
-                .ik_clamped_into(target_body, &self.params.ik, leg_q)
-                .is_err()
-            {
+            if !solve(leg, lanes_first.as_ref(), i, target_body, leg_q) {
                 for k in 0..dof {
                     leg_q[k] = q[qi[k]];
                 }
@@ -787,12 +847,11 @@ impl Walker {
             }
             if swing && self.params.swing_feedforward {
                 // q̈ = d/dt J⁻¹ ṗ by a forward difference along the reference
-                const EPS_S: f64 = 1e-3;
-                let p2 = target_body + vel_body * EPS_S + 0.5 * acc_body * EPS_S * EPS_S;
+                // (the second solve: the reference at ε)
                 let v2 = vel_body + acc_body * EPS_S;
                 let q2 = &mut self.leg_q2[..dof];
                 let qd2 = &mut self.leg_qd2[..dof];
-                let ok = leg.ik_clamped_into(p2, &self.params.ik, q2).is_ok()
+                let ok = solve(leg, lanes_second.as_ref(), i, second[i], q2)
                     && leg
                         .joint_velocities_into(q2, v2, &self.params.ik, qd2)
                         .is_ok();
@@ -919,12 +978,15 @@ impl Walker {
                 // quad16's ankle: keep the foot level with the body
                 let (kp, kd) = self.params.ankle_hold;
                 let j = vi[3] - nv0;
-                let level = match leg.ik_clamped_ankle(
-                    rot.transpose() * (self.feet_world[i] - p_base),
-                    &self.params.ik,
-                ) {
-                    Some(Ok(a)) => a,
-                    _ => 0.0,
+                // (the second solve: the foot where it stands; its ankle
+                // angle is `ik_clamped_ankle`'s, bit for bit)
+                let level = match &lanes_second {
+                    Some(a) if second[i].is_finite() => a[i][3],
+                    Some(_) => 0.0,
+                    None => match leg.ik_clamped_ankle(second[i], &self.params.ik) {
+                        Some(Ok(a)) => a,
+                        _ => 0.0,
+                    },
                 };
                 tau_joints[j] += kp * (level - q[qi[3]]) - kd * v[vi[3]];
             }
@@ -951,5 +1013,87 @@ impl Walker {
     /// The payload mass gravity compensation carries (kg).
     pub fn payload_mass_kg(&self) -> f64 {
         self.vmc.params.payload_mass_kg
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::{ContactForces, ContactPoint, ContactState, GroundMaterial};
+    use crate::integrate::{Integrator, State, StepWorkspace, step};
+    use crate::model::BaseKind;
+    use crate::robots;
+    use crate::terrain::TerrainUnion;
+
+    /// quad16's walker with its legs' IK in lanes and the same walker
+    /// solving leg by leg give the same joint torques bit for bit, tick
+    /// after tick, over 2 s of a closed-loop trot at 0.5 m/s (swing and
+    /// stance, feed-forward and level ankle; each walker drives its own
+    /// robot, so the states stay equal only while every torque does).
+    #[test]
+    fn legs_in_lanes_give_the_leg_by_leg_torques() {
+        let desc = robots::builtin("quad16").unwrap();
+        let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        let mut params = WalkerParams::default_for(&desc, &model);
+        params.command.forward_mps = 0.5;
+        let lanes = Walker::new(&desc, &model, params).unwrap();
+        if legs_ik(
+            lanes
+                .legs_in_lanes
+                .as_deref()
+                .expect("quad16's legs in lanes"),
+            &[DVec3::NEG_Z; 4],
+            &lanes.params.ik,
+        )
+        .is_none()
+        {
+            return; // no AVX2 on this CPU: the lanes never run
+        }
+        let mut by_leg = lanes.clone();
+        by_leg.legs_in_lanes = None;
+        let terrain = TerrainUnion::flat(0.0, GroundMaterial::preset("concrete").unwrap());
+        let points = ContactPoint::feet(&model, &desc);
+        let dt_s = 0.0005;
+        let mut robots = [lanes, by_leg].map(|w| {
+            let st = State {
+                q: robots::nominal_q("quad16").unwrap(),
+                v: vec![0.0; model.nv],
+            };
+            let states = vec![ContactState::default(); points.len()];
+            (w, st, states, Data::new(&model), StepWorkspace::new(&model))
+        });
+        let mut tau = [vec![0.0; model.nv], vec![0.0; model.nv]];
+        for k in 0..4_000 {
+            for (r, (walker, st, states, data, ws)) in robots.iter_mut().enumerate() {
+                crate::kinematics::forward_kinematics(&model, data, &st.q, &st.v);
+                crate::contact::update_after_step(&points, data, &terrain, states);
+                if k % 4 == 0 {
+                    let contacts: Vec<bool> = states.iter().map(|s| s.in_contact).collect();
+                    let normals: Vec<DVec3> = states.iter().map(|s| s.normal).collect();
+                    let input = WalkerInput {
+                        dt_s: 4.0 * dt_s,
+                        terrain: &terrain,
+                        contacts: &contacts,
+                        normals: &normals,
+                    };
+                    let mut tj = vec![0.0; model.nv - 6];
+                    walker.tick(&model, data, &st.q, &st.v, &input, &mut tj);
+                    tau[r][6..].copy_from_slice(&tj);
+                }
+                let mut f = ContactForces {
+                    terrain: &terrain,
+                    points: &points,
+                    states,
+                };
+                let integ = Integrator::SemiImplicitEuler;
+                step(&model, data, ws, st, &tau[r], dt_s, integ, &mut f);
+            }
+            assert_eq!(
+                tau[0].iter().map(|t| t.to_bits()).collect::<Vec<_>>(),
+                tau[1].iter().map(|t| t.to_bits()).collect::<Vec<_>>(),
+                "step {k}"
+            );
+        }
+        assert!(robots[0].1.q[0] > 0.5, "the robot walked");
     }
 }

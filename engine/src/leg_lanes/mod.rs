@@ -42,6 +42,8 @@ pub(crate) use avx_call;
 #[cfg(target_arch = "x86_64")]
 mod avx;
 #[cfg(target_arch = "x86_64")]
+mod ik;
+#[cfg(target_arch = "x86_64")]
 mod x4;
 
 #[cfg(target_arch = "x86_64")]
@@ -88,6 +90,46 @@ impl LaneKinematics {
             },
         }
     }
+}
+
+/// quad16's four legs in lanes for the closed-form IK ([`legs_ik`]); an
+/// empty stand-in off x86-64.
+#[cfg(target_arch = "x86_64")]
+pub(crate) use ik::Quad16Legs;
+
+/// The stand-in for `ik::Quad16Legs` off x86-64, where the IK has no lanes.
+#[cfg(not(target_arch = "x86_64"))]
+#[derive(Clone, Debug)]
+pub(crate) struct Quad16Legs;
+
+#[cfg(not(target_arch = "x86_64"))]
+impl Quad16Legs {
+    pub(crate) fn new(_: [&crate::legs::Quad16Leg; 4]) -> Option<Quad16Legs> {
+        None
+    }
+}
+
+/// The four legs' clamped IK ([`crate::legs::Quad16Leg::ik_clamped_angles`]'
+/// angles, leg by leg, bit for bit) with the legs in AVX lanes, where the
+/// CPU has AVX2 and the ankle holds a foot pitch; `None` otherwise (the
+/// caller then solves leg by leg). A leg whose target is not finite gets
+/// meaningless angles: the caller checks (the scalar solve's
+/// [`crate::legs::IkError::NonFinite`]).
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+pub(crate) fn legs_ik(
+    legs: &Quad16Legs,
+    targets: &[glam::DVec3; 4],
+    opts: &crate::legs::IkOptions,
+) -> Option<[[f64; 4]; 4]> {
+    multiversion::target::match_target! {
+        "x86_64+avx2+fma" => if let crate::legs::AnkleMode::FootPitch(psi) = opts.ankle {
+            let sign = opts.knee.sign(crate::legs::quad16_leg::NOMINAL_BEND);
+            return Some(avx_call!(ik::solve(legs, targets, psi, sign)));
+        },
+        _ => {},
+    }
+    let _ = (legs, targets, opts);
+    None
 }
 
 /// [`crate::trig::sin_cos_x4`] on AVX: four sines and cosines in one register.

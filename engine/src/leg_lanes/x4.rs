@@ -12,9 +12,10 @@
 use crate::spatial::{Force, Motion, RigidInertia, Transform};
 use core::arch::x86_64::{
     __m256d, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _CMP_NLT_UQ,
-    _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd, _mm256_cmp_pd, _mm256_div_pd,
-    _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd, _mm256_permute2f128_pd, _mm256_set1_pd,
-    _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd,
+    _MM_FROUND_NO_EXC, _MM_FROUND_TO_ZERO, _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd,
+    _mm256_cmp_pd, _mm256_div_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_or_pd,
+    _mm256_permute2f128_pd, _mm256_round_pd, _mm256_set1_pd, _mm256_sqrt_pd, _mm256_sub_pd,
+    _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd,
 };
 use glam::{DMat3, DVec3};
 
@@ -101,6 +102,27 @@ impl F4 {
         F4(_mm256_div_pd(self.0, o.0))
     }
 
+    /// `√self` per lane (IEEE, correctly rounded: `f64::sqrt`'s bits).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub fn sqrt(self) -> Self {
+        F4(_mm256_sqrt_pd(self.0))
+    }
+
+    /// `self` rounded toward zero per lane (`f64::trunc`'s bits).
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub fn trunc(self) -> Self {
+        F4(_mm256_round_pd::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(self.0))
+    }
+
+    /// `|self|` per lane: the sign bit cleared, as `f64::abs` does.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    pub fn abs(self) -> Self {
+        self.and(F4::bits(!(1 << 63)))
+    }
+
     /// `−self` per lane: the sign bit flipped, as scalar negation does.
     #[inline]
     #[target_feature(enable = "avx")]
@@ -111,14 +133,14 @@ impl F4 {
     /// The bitwise AND of the lanes' bit patterns.
     #[inline]
     #[target_feature(enable = "avx")]
-    fn and(self, o: Self) -> Self {
+    pub(super) fn and(self, o: Self) -> Self {
         F4(_mm256_and_pd(self.0, o.0))
     }
 
     /// The bitwise OR of the lanes' bit patterns.
     #[inline]
     #[target_feature(enable = "avx")]
-    fn or(self, o: Self) -> Self {
+    pub(super) fn or(self, o: Self) -> Self {
         F4(_mm256_or_pd(self.0, o.0))
     }
 
@@ -132,21 +154,21 @@ impl F4 {
     /// A lane mask (all bits set where true) of the comparison `self P o`.
     #[inline]
     #[target_feature(enable = "avx")]
-    fn cmp<const P: i32>(self, o: Self) -> Self {
+    pub(super) fn cmp<const P: i32>(self, o: Self) -> Self {
         F4(_mm256_cmp_pd::<P>(self.0, o.0))
     }
 
     /// `mask ? a : b` per lane (`mask` from [`Self::cmp`]).
     #[inline]
     #[target_feature(enable = "avx")]
-    fn select(mask: Self, a: Self, b: Self) -> Self {
+    pub(super) fn select(mask: Self, a: Self, b: Self) -> Self {
         F4(_mm256_blendv_pd(b.0, a.0, mask.0))
     }
 
     /// The same bit pattern in every lane.
     #[inline]
     #[target_feature(enable = "avx")]
-    fn bits(b: u64) -> Self {
+    pub(super) fn bits(b: u64) -> Self {
         F4::splat(f64::from_bits(b))
     }
 

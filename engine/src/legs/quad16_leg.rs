@@ -36,7 +36,7 @@ use crate::spatial::Transform;
 use glam::{DMat3, DVec2, DVec3};
 
 /// Knee-bend sign of quad16's nominal stance (knee −0.6 rad).
-const NOMINAL_BEND: f64 = -1.0;
+pub(crate) const NOMINAL_BEND: f64 = -1.0;
 
 /// A roll–pitch–pitch–pitch leg (quad16), derived from a compiled [`Model`].
 ///
@@ -47,18 +47,18 @@ pub struct Quad16Leg {
     foot_frame: usize,
     point_in_foot_m: DVec3,
     mount: Transform,
-    mount_inv: Transform,
-    offset_m: f64,
-    links: [DVec2; 4],
+    pub(crate) mount_inv: Transform,
+    pub(crate) offset_m: f64,
+    pub(crate) links: [DVec2; 4],
     /// `links[1]` (thigh) and `links[2]` (shank) with their lengths and
     /// arguments, the two-link solve's fixed links under
     /// [`AnkleMode::FootPitch`].
-    thigh: Link,
-    shank: Link,
+    pub(crate) thigh: Link,
+    pub(crate) shank: Link,
     /// `e^{i·0} w₄`: the foot link held level ([`AnkleMode::FootPitch`]`(0)`,
     /// the default), computed once as [`Self::pitch_chain`] would at every
     /// solve (the same bits; saves a `sin_cos` call per solve).
-    foot_level: DVec2,
+    pub(crate) foot_level: DVec2,
     q_index: [usize; 4],
     v_index: [usize; 4],
 }
@@ -69,7 +69,7 @@ pub struct Quad16Leg {
 /// `atan2(y < 0, ±0)`, checked by a unit test): one `atan2` call of four
 /// per leg solve skipped, the same bits.
 #[inline]
-fn foot_arg(z: f64, d: f64) -> f64 {
+pub(crate) fn foot_arg(z: f64, d: f64) -> f64 {
     if d == 0.0 && z < 0.0 {
         -std::f64::consts::FRAC_PI_2
     } else {

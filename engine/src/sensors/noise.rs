@@ -76,10 +76,10 @@ pub fn quantize(x: f64, quantum: f64) -> f64 {
 }
 
 /// 2⁵²: from here on every f64 is an integer.
-const TWO_52: f64 = 4_503_599_627_370_496.0;
+pub(crate) const TWO_52: f64 = 4_503_599_627_370_496.0;
 
 /// The largest f64 below one half, 0.5 − 2⁻⁵⁴.
-const HALF_DOWN: f64 = 0.499_999_999_999_999_94;
+pub(crate) const HALF_DOWN: f64 = 0.499_999_999_999_999_94;
 
 /// [`f64::round`] (half away from zero), the same bits, without its
 /// library call (a generic x86-64 build has no rounding instruction; the
