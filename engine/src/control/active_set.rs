@@ -365,39 +365,93 @@ impl ActiveSet {
     /// `L⁻¹[p][c] = +0`, which leaves their `+0` or `1` unchanged (`L[i][p]`
     /// is finite whenever the factorisation succeeds: otherwise the diagonal
     /// is not finite).
+    ///
+    /// Two rows at a time ([`Self::factor_rows`]): a row's steps form one
+    /// dependent chain through a division each (`L[i][p+1]` waits for the
+    /// update by `L[i][p]`), and two rows' chains side by side let the CPU
+    /// overlap them. Each row's operations are the one-row form's, in its
+    /// order: the same bits.
     #[inline(always)]
     fn factor<const N: usize>(&mut self, qp: &DenseQp) -> Result<(), ActiveSetError> {
         let n = size::<N>(qp.n);
-        for i in 0..n {
-            let mut acc = [0.0; MAX_VARS];
-            acc[..n].copy_from_slice(&qp.h[i][..n]);
-            let mut inv = [0.0; MAX_VARS];
-            inv[i] = 1.0;
-            for p in 0..i {
-                let lip = acc[p] / self.lc[p][p];
-                self.lc[p][i] = lip;
-                for (a, &l) in acc[..n].iter_mut().zip(&self.lc[p][..n]) {
-                    *a -= lip * l;
-                }
-                for (v, &j) in inv[..n].iter_mut().zip(&self.jt[p][..n]) {
-                    *v -= lip * j;
-                }
-            }
-            let sum = acc[i];
-            if sum <= 0.0 || !sum.is_finite() {
-                return Err(ActiveSetError::NotPositiveDefinite);
-            }
-            let lii = sum.sqrt();
-            self.lc[i][i] = lii;
-            let row = &mut self.jt[i][..n];
-            for (c, (j, &v)) in row.iter_mut().zip(&inv).enumerate() {
-                *j = if c <= i { v / lii } else { 0.0 };
-            }
+        let mut i = 0;
+        while i + 1 < n {
+            self.factor_rows::<N, 2>(qp, i)?;
+            i += 2;
+        }
+        if i < n {
+            self.factor_rows::<N, 1>(qp, i)?;
         }
         for row in self.r.iter_mut().take(n) {
             row[..n].fill(0.0);
         }
         Ok(())
+    }
+
+    /// Rows `i .. i + R` of `L` and of `J` ([`Self::factor`]): their steps
+    /// `p < i` side by side (on rows already finished, independent of one
+    /// another), then each row in turn its steps on the rows just finished
+    /// and its diagonal. A step of a row writes `L[i + r][p]` into `lc[p]`,
+    /// whose lane `i + r` the other row's update then reads: a lane past
+    /// that row's own, never read for a result (as in the one-row form).
+    #[inline(always)]
+    fn factor_rows<const N: usize, const R: usize>(
+        &mut self,
+        qp: &DenseQp,
+        i: usize,
+    ) -> Result<(), ActiveSetError> {
+        let n = size::<N>(qp.n);
+        let mut acc = [[0.0; MAX_VARS]; R];
+        let mut inv = [[0.0; MAX_VARS]; R];
+        for r in 0..R {
+            acc[r][..n].copy_from_slice(&qp.h[i + r][..n]);
+            inv[r][i + r] = 1.0;
+        }
+        for p in 0..i {
+            let lip: [f64; R] = std::array::from_fn(|r| acc[r][p] / self.lc[p][p]);
+            self.lc[p][i..i + R].copy_from_slice(&lip);
+            for r in 0..R {
+                self.factor_step(n, p, lip[r], &mut acc[r], &mut inv[r]);
+            }
+        }
+        for r in 0..R {
+            for p in i..i + r {
+                let lip = acc[r][p] / self.lc[p][p];
+                self.lc[p][i + r] = lip;
+                self.factor_step(n, p, lip, &mut acc[r], &mut inv[r]);
+            }
+            let row = i + r;
+            let sum = acc[r][row];
+            if sum <= 0.0 || !sum.is_finite() {
+                return Err(ActiveSetError::NotPositiveDefinite);
+            }
+            let lii = sum.sqrt();
+            self.lc[row][row] = lii;
+            let out = &mut self.jt[row][..n];
+            for (c, (j, &v)) in out.iter_mut().zip(&inv[r]).enumerate() {
+                *j = if c <= row { v / lii } else { 0.0 };
+            }
+        }
+        Ok(())
+    }
+
+    /// One step `p` of a row of the factor (`lip = L[row][p]`): the row's
+    /// sums of `L` and of `L⁻¹` each less `lip` times row `p`.
+    #[inline(always)]
+    fn factor_step(
+        &self,
+        n: usize,
+        p: usize,
+        lip: f64,
+        acc: &mut [f64; MAX_VARS],
+        inv: &mut [f64; MAX_VARS],
+    ) {
+        for (a, &l) in acc[..n].iter_mut().zip(&self.lc[p][..n]) {
+            *a -= lip * l;
+        }
+        for (v, &j) in inv[..n].iter_mut().zip(&self.jt[p][..n]) {
+            *v -= lip * j;
+        }
     }
 
     /// Adds the constraint with `d = Jᵀ n_p`: Givens rotations zero `d[iq+1..]`
