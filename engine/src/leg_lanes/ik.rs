@@ -141,6 +141,12 @@ fn per_lane(a: F4, b: F4, f: impl Fn(f64, f64) -> f64) -> F4 {
     F4::from_array(std::array::from_fn(|k| f(a[k], b[k])))
 }
 
+/// `f(a[k])` per lane, for the libm calls.
+#[inline(always)]
+fn per_lane1(a: F4, f: impl Fn(f64) -> f64) -> F4 {
+    F4::from_array(a.to_array().map(f))
+}
+
 /// `sensors::noise::round_half_away` per lane.
 #[inline]
 #[target_feature(enable = "avx")]
@@ -243,7 +249,7 @@ pub(crate) fn solve(
         F4::splat(1.0),
     );
     let sign = F4::splat(bend_sign);
-    let gamma = sign.mul(per_lane(cos_g, cos_g, |c, _| c.acos()));
+    let gamma = sign.mul(per_lane1(cos_g, f64::acos));
     let theta_b = wrap_angle(gamma.sub(legs.shank_arg).add(legs.thigh_arg));
     let one = F4::splat(1.0);
     let sin_g = sign.mul(one.sub(cos_g).mul(one.add(cos_g)).sqrt());
