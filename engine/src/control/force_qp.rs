@@ -24,9 +24,9 @@
 //!   zero smoothly as the gait unloads it. Feet with `λ = 0` get no force.
 //!
 //! Two solvers give the same minimiser: [`solve_clarabel`], the reference
-//! (the `clarabel` interior-point crate; allocates; 100–200 µs per solve at
+//! (the `clarabel` interior-point crate; allocates; 64–122 µs per solve at
 //! its tightened tolerances), and [`ForceQp::solve`], a dual active-set
-//! solver on the stack ([`super::active_set`]; 1.5–3.5 µs, so ≤ 0.9 µs per
+//! solver on the stack ([`super::active_set`]; 0.45–1.4 µs, so ≤ 0.35 µs per
 //! physics step when the controller runs at a quarter of the step rate),
 //! checked against it to 1e-6 in `engine/tests/vmc.rs`
 //! (`engine/benches/control.rs` measures both).
