@@ -308,26 +308,22 @@ fn measure<const L: usize>(
     z: [f64; L],
     r: f64,
 ) {
+    // `hᵀv`: `v[a] − v[b]` (or `v[a]`)
+    let h = |v: &[f64; AXIS_N]| match b {
+        Some(b) => v[a] - v[b],
+        None => v[a],
+    };
+    // `u = P h`, row by row (`P` is symmetric)
     let mut u = [0.0; AXIS_N];
     for (u, row) in u.iter_mut().zip(p.iter()) {
-        *u = match b {
-            Some(b) => row[a] - row[b],
-            None => row[a],
-        };
+        *u = h(row);
     }
-    let s = match b {
-        Some(b) => u[a] - u[b],
-        None => u[a],
-    } + r;
+    let s = h(&u) + r;
     if s <= 0.0 || !s.is_finite() {
         return;
     }
     for (x, z) in xs.into_iter().zip(z) {
-        let hx = match b {
-            Some(b) => x[a] - x[b],
-            None => x[a],
-        };
-        let gain = (z - hx) / s;
+        let gain = (z - h(x)) / s;
         for (x, u) in x.iter_mut().zip(&u) {
             *x += u * gain;
         }

@@ -90,9 +90,8 @@ impl C4 {
 pub(crate) struct Quad16Legs {
     mount_inv_rot: M3,
     mount_inv_trans: V3,
-    /// The lateral offset `d` per lane, and as an array for `foot_arg`.
+    /// The lateral offset `d` per lane.
     offset: F4,
-    offset_m: [f64; 4],
     w1: C4,
     w4: C4,
     foot_level: C4,
@@ -121,7 +120,6 @@ impl Quad16Legs {
             mount_inv_rot: M3::from_lanes(legs.map(|l| l.mount_inv.rot)),
             mount_inv_trans: V3::from_lanes(legs.map(|l| l.mount_inv.trans)),
             offset: f4(&|l| l.offset_m),
-            offset_m: legs.map(|l| l.offset_m),
             w1: c4(&|l| l.links[0]),
             w4: c4(&|l| l.links[3]),
             foot_level: c4(&|l| l.foot_level),
@@ -151,13 +149,13 @@ fn per_lane1(a: F4, f: impl Fn(f64) -> f64) -> F4 {
 #[inline]
 #[target_feature(enable = "avx")]
 fn round_half_away(x: F4) -> F4 {
-    let sign = F4::bits(1 << 63);
+    // `x`'s sign bit alone: the signed zero, and `copysign`'s sign
+    let sign = x.and(F4::bits(1 << 63));
     let a = x.abs();
-    let zero = x.and(sign);
-    let whole = a.add(F4::splat(HALF_DOWN)).trunc().or(x.and(sign));
+    let whole = a.add(F4::splat(HALF_DOWN)).trunc().or(sign);
     F4::select(
         a.cmp::<_CMP_LT_OQ>(F4::splat(0.5)),
-        zero,
+        sign,
         F4::select(a.cmp::<_CMP_LT_OQ>(F4::splat(TWO_52)), whole, x),
     )
 }
@@ -223,7 +221,7 @@ pub(crate) fn solve(
         F4::splat(0.0),
         r.sub(d_abs).mul(r.add(d_abs)).sqrt().neg(),
     );
-    let (zs, offsets) = (z.to_array(), legs.offset_m);
+    let (zs, offsets) = (z.to_array(), legs.offset.to_array());
     let roll_arg = per_lane(p.z, p.y, f64::atan2);
     let roll = wrap_angle(roll_arg.sub(F4::from_array(std::array::from_fn(|k| {
         foot_arg(zs[k], offsets[k])
