@@ -78,6 +78,86 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
     }
 }
 
+/// [`com_and_velocity`] for readers of outputs only (the observation behind
+/// the metrics, logs and fall check), summed leg by leg where the robot's
+/// four legs run in lanes (`Model::leg_lanes`): each leg's bodies in group
+/// order in its own lane, then the base, leg 0, …, leg 3. That is another
+/// order of the same sums (the values agree within round-off, not to the
+/// bit, with [`com_and_velocity`], which the controller reads), and every
+/// path gives its bits: the lanes' sums where `data` holds them, otherwise the
+/// same sums in scalar code ([`leg_mass_sums_scalar`]), whatever filled the
+/// kinematics (robot batches, either build). Other models: [`com_and_velocity`].
+#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
+pub fn com_and_velocity_by_legs(model: &Model, data: &Data) -> (DVec3, DVec3) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(plan) = &model.leg_lanes
+        && plan.leg_major
+        && model.nbodies == 1 + crate::leg_lanes::LEGS * plan.groups.len()
+    {
+        multiversion::target::match_target! {
+            "x86_64+avx2+fma" => if data.lanes.valid {
+                let sums = crate::leg_lanes::avx_call!(crate::leg_lanes::leg_mass_sums(data));
+                return add_base(model, data, &sums);
+            },
+            _ => {},
+        }
+        return add_base(model, data, &leg_mass_sums_scalar(data, model, plan));
+    }
+    com_and_velocity(model, data)
+}
+
+/// [`crate::leg_lanes::leg_mass_sums`] leg by leg in scalar code, the same
+/// operations in the same order: per leg `k`, over its bodies in group
+/// order from `0.0`, `Σ m`, `Σ m c` and `Σ m (v + ω × c)`, as
+/// `[m, mc.x, mc.y, mc.z, p.x, p.y, p.z][k]`.
+#[cfg(target_arch = "x86_64")]
+pub(crate) fn leg_mass_sums_scalar(
+    data: &Data,
+    model: &Model,
+    plan: &crate::leg_lanes::LegLanes,
+) -> [[f64; crate::leg_lanes::LEGS]; 7] {
+    let mut out = [[0.0; crate::leg_lanes::LEGS]; 7];
+    for k in 0..crate::leg_lanes::LEGS {
+        let (mut m, mut mc, mut p) = (0.0, DVec3::ZERO, DVec3::ZERO);
+        for grp in &plan.groups {
+            let i = grp[k];
+            let (ri, v) = (data.body_inertia(model, i), data.vel[i]);
+            mc += ri.com * ri.mass;
+            m += ri.mass;
+            p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
+        }
+        for (o, x) in out.iter_mut().zip([m, mc.x, mc.y, mc.z, p.x, p.y, p.z]) {
+            o[k] = x;
+        }
+    }
+    out
+}
+
+/// The CoM and its velocity from the legs' sums (`leg_mass_sums`' layout):
+/// the base's terms, then leg 0, …, leg 3 added in turn.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn add_base(
+    model: &Model,
+    data: &Data,
+    legs: &[[f64; crate::leg_lanes::LEGS]; 7],
+) -> (DVec3, DVec3) {
+    let (ri, v) = (data.body_inertia(model, 0), data.vel[0]);
+    let mut m = ri.mass;
+    let mut mc = ri.com * ri.mass;
+    let mut p = (v.lin + v.ang.cross(ri.com)) * ri.mass;
+    for k in 0..crate::leg_lanes::LEGS {
+        m += legs[0][k];
+        mc += DVec3::new(legs[1][k], legs[2][k], legs[3][k]);
+        p += DVec3::new(legs[4][k], legs[5][k], legs[6][k]);
+    }
+    if m > 0.0 {
+        (data.origin + mc / m, p / m)
+    } else {
+        (data.origin, DVec3::ZERO)
+    }
+}
+
 /// Linear momentum `Σ mᵢ (vᵢ + ωᵢ × cᵢ)` (kg·m/s, world): the linear part of
 /// [`spatial_momentum`], the same sum in the same order without the angular
 /// part's inertia products (the CoM velocity is read every step).
@@ -127,5 +207,27 @@ mod tests {
         let (c, vc) = com_and_velocity(&model, &data);
         assert_eq!(c.to_array(), center_of_mass(&model, &data).to_array());
         assert_eq!(vc.to_array(), com_velocity(&model, &data).to_array());
+    }
+
+    /// The leg-by-leg sums: within round-off of the body-order ones, and on
+    /// x86-64 the lanes' bits equal the scalar sums' in the same order
+    /// (the path a robot batch or the generic build takes).
+    #[test]
+    fn com_and_velocity_by_legs_is_the_same_sums_in_leg_order() {
+        let (model, data) = moving_quad16(|i| (i * 0.9).cos() * 1.2);
+        let (c, vc) = com_and_velocity_by_legs(&model, &data);
+        let (c0, vc0) = com_and_velocity(&model, &data);
+        assert!(vc0.length() > 0.1, "the state moves: {vc0}");
+        assert!((c - c0).length() <= 1e-14 * c0.length(), "{c} vs {c0}");
+        assert!((vc - vc0).length() <= 1e-13 * vc0.length(), "{vc} vs {vc0}");
+        #[cfg(target_arch = "x86_64")]
+        {
+            let plan = model.leg_lanes.as_ref().expect("quad16's legs in lanes");
+            let (cs, vcs) = add_base(&model, &data, &leg_mass_sums_scalar(&data, &model, plan));
+            assert_eq!(c.to_array(), cs.to_array());
+            assert_eq!(vc.to_array(), vcs.to_array());
+            // the lanes were there to read, on a CPU with them
+            assert_eq!(data.lanes.valid, crate::leg_lanes::runs_on(&model));
+        }
     }
 }

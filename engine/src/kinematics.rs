@@ -237,12 +237,18 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
     match kinematics_level(model, data, q, Some(v)) {
         2 => return,
         1 => {
-            // poses are valid for q: velocities only (the lane cache holds
-            // no velocities, so its subspaces and inertias stay valid)
+            // poses are valid for q: velocities only (the lane cache's
+            // subspaces and inertias stay valid; its velocities follow)
             data.vel[0] = base_velocity(model, data, v);
             for i in 1..model.nbodies {
                 data.vel[i] =
                     data.vel[model.parent[i]] + data.subspace(model, i) * v[model.idx_v[i]];
+            }
+            #[cfg(target_arch = "x86_64")]
+            if data.lanes.valid
+                && let Some(plan) = &model.leg_lanes
+            {
+                crate::leg_lanes::refresh_lane_velocities(plan, data);
             }
         }
         _ => {
@@ -364,5 +370,32 @@ mod tests {
         let a2 = q[0] + q[1];
         let expect = DVec3::new(a1.cos() + 0.5 * a2.cos(), 0.0, -(a1.sin() + 0.5 * a2.sin()));
         assert!((tip - expect).length() < 1e-14, "{tip} vs {expect}");
+    }
+
+    /// Forward kinematics at the same `q` and another `v` updates only the
+    /// velocities; whatever reads them afterwards (ABA in the legs' lanes,
+    /// which reads the lane cache's velocities on an AVX2 CPU, and the
+    /// observation's CoM velocity) gives a fresh `Data`'s bits.
+    #[test]
+    fn velocities_only_update_gives_a_fresh_evaluations_bits() {
+        let desc = crate::robots::builtin("quad16").unwrap();
+        let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        let mut q = crate::robots::nominal_q("quad16").unwrap();
+        q[0] = 0.2;
+        let v1: Vec<f64> = (0..model.nv).map(|i| (i as f64 * 0.7).sin()).collect();
+        let v2: Vec<f64> = (0..model.nv).map(|i| (i as f64 * 1.3).cos()).collect();
+        let tau: Vec<f64> = (0..model.nv)
+            .map(|i| (i as f64 * 0.4).sin() * 3.0)
+            .collect();
+        let mut reused = Data::new(&model);
+        forward_kinematics(&model, &mut reused, &q, &v1);
+        forward_kinematics(&model, &mut reused, &q, &v2);
+        let mut fresh = Data::new(&model);
+        forward_kinematics(&model, &mut fresh, &q, &v2);
+        let c = |d: &Data| crate::com::com_and_velocity_by_legs(&model, d);
+        assert_eq!(c(&reused).1.to_array(), c(&fresh).1.to_array());
+        let a_reused = crate::aba::aba(&model, &mut reused, &q, &v2, &tau).to_vec();
+        let a_fresh = crate::aba::aba(&model, &mut fresh, &q, &v2, &tau).to_vec();
+        assert_eq!(a_reused, a_fresh);
     }
 }

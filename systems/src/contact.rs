@@ -7,7 +7,7 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 use quadsim_components::{RobotBatch, RobotSim, SimClock, SimThreadPool};
 use quadsim_engine::Data;
-use quadsim_engine::com::com_and_velocity;
+use quadsim_engine::com::com_and_velocity_by_legs;
 use quadsim_engine::contact::{ContactKind, update_after_step};
 use quadsim_engine::kinematics::forward_kinematics;
 use quadsim_engine::metrics::FootSample;
@@ -58,7 +58,7 @@ pub fn observe_robot(sim: &mut RobotSim, t_s: f64) {
     let obs = &mut run.observation;
     obs.t_s = t_s;
     obs.base = data.pose[0];
-    (obs.com_m, obs.com_velocity_mps) = com_and_velocity(model, data);
+    (obs.com_m, obs.com_velocity_mps) = com_and_velocity_by_legs(model, data);
     obs.base_height_above_ground_m = height_above_ground(&contact.terrain, obs.base.trans);
     obs.com_height_above_ground_m = height_above_ground(&contact.terrain, obs.com_m);
     // the actuated joints (compliant payloads' coordinates close q and v)

@@ -59,14 +59,14 @@ impl GroupStep {
     }
 }
 
-/// One group's motion subspace and reference inertia as [`poses_legs`]
-/// computed them in lanes (kept in [`Data`]'s lane cache). Not the
-/// velocities: those are gathered from `data.vel`, which keeps the cache
-/// within the memory budget per robot (768 bytes fewer for quad16).
+/// One group's motion subspace, reference inertia and velocity as
+/// [`poses_legs`] computed them in lanes (kept in [`Data`]'s lane cache).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct GroupKinematics {
     s: Motion4,
     inertia: Inertia4,
+    /// The velocities (for [`leg_mass_sums`]; 768 bytes a quad16).
+    v: Motion4,
 }
 
 impl GroupKinematics {
@@ -93,6 +93,15 @@ fn gather_motions(m: &[Motion], grp: &[usize; LEGS]) -> Motion4 {
         gather_v3([&ma.lin, &mb.lin, &mc.lin, &md.lin]),
         gather_v3([&ma.ang, &mb.ang, &mc.ang, &md.ang]),
     )
+}
+
+/// The lane cache's velocities again from `data.vel`, after forward
+/// kinematics updated only the velocities (the same `q`, another `v`): the
+/// subspaces and inertias in the cache still hold.
+pub(crate) fn refresh_lane_velocities(plan: &LegLanes, data: &mut Data) {
+    for (gk, grp) in data.lanes.groups.iter_mut().zip(&plan.groups) {
+        gk.v = gather_motions(&data.vel, grp);
+    }
 }
 
 /// Four vectors in lanes, element by element.
@@ -132,6 +141,7 @@ fn gather_kinematics(grp: &[usize; LEGS], data: &Data) -> GroupKinematics {
     GroupKinematics {
         s: gather_motions(&data.s, grp),
         inertia,
+        v: gather_motions(&data.vel, grp),
     }
 }
 
@@ -144,12 +154,12 @@ pub(super) fn group_kinematics(
     grp: &[usize; LEGS],
     data: &Data,
 ) -> (Motion4, Inertia4, Motion4) {
-    let GroupKinematics { s, inertia } = if data.lanes.valid {
+    let GroupKinematics { s, inertia, v } = if data.lanes.valid {
         data.lanes.groups[g]
     } else {
         gather_kinematics(grp, data)
     };
-    (s, inertia, gather_motions(&data.vel, grp))
+    (s, inertia, v)
 }
 
 /// What ABA's last pass needs of one group, kept from the inward pass (one
@@ -347,11 +357,43 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             for k in 0..LEGS {
                 vel[bodies[k]] = vs[k];
             }
+            if fill {
+                cache[g].v = vel_g;
+            }
             vp = vel_g;
         }
         xp = x;
     }
     data.lanes.valid = fill;
+}
+
+/// Per leg (lane `k`), over its bodies in group order from `0.0`: `Σ m`,
+/// `Σ m c` and `Σ m (v + ω × c)` (`c` the CoM relative to the reference
+/// point), as `[m, mc.x, mc.y, mc.z, p.x, p.y, p.z][k]`, from the lane
+/// cache `data` holds (`data.lanes.valid`), for
+/// `com::com_and_velocity_by_legs`; [`crate::com::leg_mass_sums_scalar`]
+/// gives the same bits. (Summed inside [`poses_legs`]' chain, the sums'
+/// registers pushed the chain's values to the stack: about 215
+/// instructions more per call, on every forward kinematics.)
+#[target_feature(enable = "avx")]
+pub(crate) fn leg_mass_sums(data: &Data) -> [[f64; LEGS]; 7] {
+    let zero = F4::splat(0.0);
+    let (mut m, mut mc, mut p) = (zero, V3::new(zero, zero, zero), V3::new(zero, zero, zero));
+    for gk in &data.lanes.groups {
+        let (inertia, v) = (&gk.inertia, &gk.v);
+        mc = mc.add(inertia.com.scale(inertia.mass));
+        m = m.add(inertia.mass);
+        p = p.add(v.lin.add(v.ang.cross(inertia.com)).scale(inertia.mass));
+    }
+    [
+        m.to_array(),
+        mc.x.to_array(),
+        mc.y.to_array(),
+        mc.z.to_array(),
+        p.x.to_array(),
+        p.y.to_array(),
+        p.z.to_array(),
+    ]
 }
 
 /// The forces `f[i]` of the bodies `grp` in lanes, element by element:
@@ -436,8 +478,8 @@ pub(crate) fn aba_passes_legs(
     for g in (0..ng).rev() {
         let grp = &groups[g];
         let st = &plan.steps[g];
-        let GroupKinematics { s, inertia } = &kin[g];
-        let vi = gather_motions(&data.vel, grp);
+        let GroupKinematics { s, inertia, v: vi } = &kin[g];
+        let vi = *vi;
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
         if use_external {
             pai = pai.sub(gather_forces(f_ext, grp));

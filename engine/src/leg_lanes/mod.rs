@@ -48,8 +48,8 @@ mod x4;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use avx::{
-    GroupKinematics, GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, poses_legs,
-    reserve_workspace, rnea_passes_legs,
+    GroupKinematics, GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, leg_mass_sums,
+    poses_legs, refresh_lane_velocities, reserve_workspace, rnea_passes_legs,
 };
 
 use crate::model::{JointType, Model};
