@@ -148,6 +148,43 @@ pub fn add_passive_torques(
     let (q_j, v_j, tau_j) = (&q[bq..bq + nj], &v[bv..nv], &mut tau[bv..nv]);
     let (damping, friction) = (&model.damping[bv..nv], &model.friction[bv..nv]);
     let (lower, upper) = (&model.lower_limit[bv..nv], &model.upper_limit[bv..nv]);
+    // Without friction (off, or zero on every joint, the usual model), the
+    // loop without its branches, which vectorises: each joint's terms as
+    // below (a zero friction term added to `0.0 + damping`, never −0.0,
+    // changes nothing), the limit's two sides both formed and one picked.
+    if !params.friction || friction.iter().all(|&f| f == 0.0) {
+        let (k, b) = (params.limit_stiffness, params.limit_damping);
+        for (((((tau, &q), &qd), &d), &lo), &hi) in tau_j
+            .iter_mut()
+            .zip(q_j)
+            .zip(v_j)
+            .zip(damping)
+            .zip(lower)
+            .zip(upper)
+        {
+            let mut t = 0.0
+                + if params.damping {
+                    damping_torque(d, qd)
+                } else {
+                    0.0
+                };
+            if params.limits {
+                // `limit_torque`'s expressions
+                let above = (-k * (q - hi) - b * qd).min(0.0);
+                let below = (k * (lo - q) - b * qd).max(0.0);
+                t += if q > hi {
+                    above
+                } else if q < lo {
+                    below
+                } else {
+                    0.0
+                };
+            }
+            *tau += t;
+        }
+        spring_torques(model, q, v, tau);
+        return;
+    }
     for j in 0..nj {
         let qd = v_j[j];
         let mut t = 0.0;
@@ -192,6 +229,67 @@ mod tests {
             let t = friction_torque(2.0, qd, 0.1);
             assert_eq!(t, -friction_torque(2.0, -qd, 0.1));
             assert!(t.abs() <= 2.0 && t * qd <= 0.0);
+        }
+    }
+
+    /// Without friction, the branch-free loop gives each joint the bits of
+    /// `0.0 + damping_torque + limit_torque` (the general loop's terms), on
+    /// quad16 with joints inside, above and below their limits, moving
+    /// either way, with each switch on and off.
+    #[test]
+    fn frictionless_loop_is_the_terms_sum() {
+        use crate::model::{BaseKind, Model};
+        let desc = crate::robots::builtin("quad16").unwrap();
+        let mut model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+        let (bq, bv) = (model.base_nq(), model.base_nv());
+        // (quad16's joints have no damping of their own)
+        for (j, d) in model.damping[bv..].iter_mut().enumerate() {
+            *d = 0.05 * (j as f64 + 1.0);
+        }
+        let mut q = crate::robots::nominal_q("quad16").unwrap();
+        let v: Vec<f64> = (0..model.nv)
+            .map(|i| (i as f64 * 0.9).sin() * 3.0)
+            .collect();
+        for j in 0..model.nv - bv {
+            let (lo, hi) = (model.lower_limit[bv + j], model.upper_limit[bv + j]);
+            q[bq + j] = match j % 3 {
+                0 => hi + 0.01 * (j as f64 + 1.0),
+                1 => lo - 0.02 * (j as f64 + 1.0),
+                _ => 0.5 * (lo + hi),
+            };
+        }
+        for (damping, limits) in [(true, true), (true, false), (false, true)] {
+            let params = PassiveParams {
+                damping,
+                friction: false,
+                limits,
+                ..PassiveParams::default()
+            };
+            let mut tau = vec![0.25; model.nv];
+            add_passive_torques(&model, &params, &q, &v, &mut tau);
+            let acting = tau[bv..].iter().filter(|&&t| t != 0.25).count();
+            assert!(
+                acting >= (model.nv - bv) / 2,
+                "terms act on the joints: {acting}"
+            );
+            for j in 0..model.nv - bv {
+                let (qj, qd) = (q[bq + j], v[bv + j]);
+                let mut t = 0.0;
+                if damping {
+                    t += damping_torque(model.damping[bv + j], qd);
+                }
+                if limits {
+                    t += limit_torque(
+                        qj,
+                        qd,
+                        model.lower_limit[bv + j],
+                        model.upper_limit[bv + j],
+                        params.limit_stiffness,
+                        params.limit_damping,
+                    );
+                }
+                assert_eq!(tau[bv + j].to_bits(), (0.25 + t).to_bits(), "joint {j}");
+            }
         }
     }
 
