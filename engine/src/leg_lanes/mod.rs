@@ -582,6 +582,20 @@ mod tests {
             let (s, c) = f4_sin_cos(x).unwrap();
             crate::trig::tests::assert_libm_bits(x, s, c);
         }
+        // every lane within ±π/4 (`F4::sin_cos_within_pio4`): zeros,
+        // subnormals, tiny arguments and both sides of the bounds
+        use crate::trig::{PIO4, TINY};
+        let below = |x: f64| f64::from_bits(x.to_bits() - 1);
+        for x in [
+            [0.0, -0.0, 5e-324, -5e-324],
+            [f64::MIN_POSITIVE, TINY, below(TINY), -TINY],
+            [1e-9, -1e-5, 2e-8, -1e-300],
+            [PIO4, -PIO4, below(PIO4), -below(PIO4)],
+            [0.3, -0.6, 0.785, -0.1],
+        ] {
+            let (s, c) = f4_sin_cos(x).unwrap();
+            crate::trig::tests::assert_libm_bits(x, s, c);
+        }
     }
 
     /// A repeated velocity at new joint rates (forward kinematics' velocity-only
