@@ -108,7 +108,7 @@ fn contact(c: &mut Criterion) {
                     &cold,
                     None,
                 );
-                data[0].f_ext[0].lin.z
+                data[0].external_forces()[0].lin.z
             })
         });
         for (label, evals) in [("step_euler", 1), ("step_rk4", 4)] {

@@ -44,8 +44,16 @@ pub struct Data {
     /// Spatial force transmitted by each body's parent joint (RNEA), reference frame (nbodies).
     pub f: Vec<Force>,
     /// External spatial force on each body, world axes about `origin` (nbodies).
-    /// Set by the caller (contacts, pushes) after kinematics; see [`Data::add_point_force`].
-    pub f_ext: Vec<Force>,
+    /// Set by the caller (contacts, pushes) after kinematics through
+    /// [`Data::add_point_force`], [`Data::add_external_force`] or
+    /// [`Data::external_forces_mut`]; read with [`Data::external_forces`].
+    pub(crate) f_ext: Vec<Force>,
+    /// Which bodies' `f_ext` may be non-zero since the last
+    /// [`Data::clear_external_forces`]: bit `min(b, 63)` for body `b`. The
+    /// clear then zeroes only those, and ABA in the legs' lanes skips the
+    /// groups none of whose bodies has a force (subtracting an exact +0
+    /// changes no bit).
+    f_ext_touched: u64,
 
     // --- outputs ---
     /// Generalised acceleration from ABA (nv).
@@ -123,6 +131,7 @@ impl Data {
             acc: dyn_vec(dynamics, Motion::ZERO, nb),
             f: dyn_vec(dynamics, Force::ZERO, nb),
             f_ext: dyn_vec(dynamics, Force::ZERO, nb),
+            f_ext_touched: 0,
             ddq: dyn_vec(dynamics, 0.0, nv),
             tau: dyn_vec(dynamics, 0.0, nv),
             nle: dyn_vec(dynamics, 0.0, nv),
@@ -303,16 +312,56 @@ impl Data {
         self.lanes.valid = false;
     }
 
-    /// Clears every external force.
+    /// Clears every external force (only the entries written since the
+    /// last clear: the others are zero already).
     pub fn clear_external_forces(&mut self) {
-        self.f_ext.fill(Force::ZERO);
+        let touched = std::mem::take(&mut self.f_ext_touched);
+        if touched & (1 << 63) != 0 {
+            self.f_ext.fill(Force::ZERO);
+            return;
+        }
+        let mut bits = touched;
+        while bits != 0 {
+            let b = bits.trailing_zeros() as usize;
+            self.f_ext[b] = Force::ZERO;
+            bits &= bits - 1;
+        }
+    }
+
+    /// The external spatial forces on the bodies, world axes about
+    /// [`Data::origin`] (nbodies; empty in a kinematics-only `Data`).
+    #[inline]
+    pub fn external_forces(&self) -> &[Force] {
+        &self.f_ext
+    }
+
+    /// The external forces to write directly (every entry counts as
+    /// written until the next [`Data::clear_external_forces`]).
+    pub fn external_forces_mut(&mut self) -> &mut [Force] {
+        self.f_ext_touched = u64::MAX;
+        &mut self.f_ext
+    }
+
+    /// Adds the spatial force `f` (world axes, about [`Data::origin`]) on `body`.
+    #[inline]
+    pub fn add_external_force(&mut self, body: usize, f: Force) {
+        self.f_ext[body] += f;
+        self.f_ext_touched |= body_bit(body);
+    }
+
+    /// Whether a body of `bodies` may carry an external force (one written
+    /// since the last clear).
+    #[inline]
+    pub(crate) fn external_force_on_any(&self, bodies: &[usize]) -> bool {
+        let mask = bodies.iter().fold(0, |m, &b| m | body_bit(b));
+        self.f_ext_touched & mask != 0
     }
 
     /// Adds a force `force_n` (N, world frame) acting on `body` at the world point `point_m`.
     /// Valid until the next kinematics call moves [`Data::origin`].
     #[inline]
     pub fn add_point_force(&mut self, body: usize, point_m: DVec3, force_n: DVec3) {
-        self.f_ext[body] += Force::at_point(force_n, point_m - self.origin);
+        self.add_external_force(body, Force::at_point(force_n, point_m - self.origin));
     }
 
     /// World position of a point given in a body's frame (after kinematics).
@@ -394,6 +443,13 @@ impl BodyScratch {
     }
 }
 
+/// `Data::f_ext_touched`'s bit for `body`: its own below 63, bit 63 for
+/// every body from 63 on.
+#[inline]
+fn body_bit(body: usize) -> u64 {
+    1 << body.min(63)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -409,6 +465,34 @@ mod tests {
             link.inertia_kgm2 = link.inertia_kgm2.map(|i| i * scale_mass);
         }
         Model::from_description(&desc, BaseKind::Floating).unwrap()
+    }
+
+    /// Clearing the external forces zeroes every entry written since the
+    /// last clear, by any route (a point force, a spatial force, direct
+    /// writes), and `external_force_on_any` sees exactly the written bodies.
+    #[test]
+    fn clearing_external_forces_zeroes_what_was_written() {
+        let m = model("quad16", 1.0);
+        let mut d = Data::new(&m);
+        let f = Force::new(DVec3::new(1.0, -2.0, 3.0), DVec3::new(0.5, 0.0, -0.25));
+        d.add_point_force(3, DVec3::new(0.1, 0.2, 0.3), DVec3::Z);
+        d.add_external_force(7, f);
+        assert!(d.external_force_on_any(&[1, 3]) && d.external_force_on_any(&[7]));
+        assert!(!d.external_force_on_any(&[0, 1, 2, 4, 5, 6, 8]));
+        d.clear_external_forces();
+        assert!(d.external_forces().iter().all(|&x| x == Force::ZERO));
+        assert!(!d.external_force_on_any(&[3, 7]));
+        for x in d.external_forces_mut() {
+            *x = f;
+        }
+        assert!(d.external_force_on_any(&[0]));
+        d.clear_external_forces();
+        assert!(d.external_forces().iter().all(|&x| x == Force::ZERO));
+        // bodies from 63 on share one bit, which clears them all
+        assert_eq!(
+            (body_bit(62), body_bit(63), body_bit(200)),
+            (1 << 62, 1 << 63, 1 << 63)
+        );
     }
 
     /// Inverse dynamics on a spare equal a fresh workspace's bit for bit,

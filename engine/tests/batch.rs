@@ -61,7 +61,7 @@ fn scalar(model: &Model, r: &Robot, external: bool) -> (Vec<f64>, Vec<[f64; 6]>)
     let mut data = Data::new(model);
     if external {
         forward_kinematics(model, &mut data, &r.q, &r.v);
-        data.f_ext.copy_from_slice(&r.f_ext);
+        data.external_forces_mut().copy_from_slice(&r.f_ext);
         aba_from_kinematics(model, &mut data, &r.v, &r.tau, true);
     } else {
         aba(model, &mut data, &r.q, &r.v, &r.tau);

@@ -425,7 +425,7 @@ fn kept_force_is_the_fresh_evaluation() {
         let mut d = sim.data.clone();
         d.clear_external_forces();
         contact::contact_forces(&sim.points, &sim.model, &mut d, &sim.terrain, states, None);
-        d.f_ext[0]
+        d.external_forces()[0]
     };
     let bits =
         |f: quadsim_engine::spatial::Force| [f.lin, f.ang].map(|v| v.to_array().map(f64::to_bits));

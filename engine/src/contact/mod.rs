@@ -428,7 +428,7 @@ pub fn contact_forces(
             && let Some(f) = cached_force(p, data, s)
         {
             if let Some(f) = f {
-                data.f_ext[p.body] += f;
+                data.add_external_force(p.body, f);
             }
             continue;
         }

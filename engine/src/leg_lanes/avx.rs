@@ -481,7 +481,7 @@ pub(crate) fn aba_passes_legs(
         let GroupKinematics { s, inertia, v: vi } = &kin[g];
         let vi = *vi;
         let mut pai = vi.cross_force(inertia.mul_motion(vi));
-        if use_external {
+        if use_external && data.external_force_on_any(grp) {
             pai = pai.sub(gather_forces(f_ext, grp));
         }
         // one check for the gathers of v, armature and tau below
@@ -695,7 +695,7 @@ pub(crate) fn rnea_passes_legs<const FULL: bool>(
             .mul_motion(acc)
             .add(vi.cross_force(inertia.mul_motion(vi)));
         if FULL {
-            if use_external {
+            if use_external && data.external_force_on_any(grp) {
                 f = f.sub(gather_forces(&data.f_ext, grp));
             }
             let accs = acc.lanes();

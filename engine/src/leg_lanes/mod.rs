@@ -307,7 +307,7 @@ mod tests {
 
     /// Distinct external forces on every body (after kinematics).
     fn set_external_forces(d: &mut Data) {
-        for (i, f) in d.f_ext.iter_mut().enumerate() {
+        for (i, f) in d.external_forces_mut().iter_mut().enumerate() {
             let k = i as f64;
             f.lin = DVec3::new(3.0 * k - 10.0, 0.5 * k, 40.0 - k);
             f.ang = DVec3::new(0.1 * k, -0.2, 0.3 * k - 1.0);
