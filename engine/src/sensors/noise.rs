@@ -89,7 +89,7 @@ pub(crate) const HALF_DOWN: f64 = 0.499_999_999_999_999_94;
 /// at least one half; the lowering compilers use for `round` where the CPU
 /// truncates), and the truncation is one conversion to an integer and back.
 /// Below one half (an angle's turns within half a turn, the usual case of
-/// [`crate::legs::wrap_angle`] and the metrics' yaw unwrap) the answer is
+/// [`crate::legs::wrap_angle`]) the answer is
 /// the zero of `x`'s sign, without the sum.
 #[inline]
 pub fn round_half_away(x: f64) -> f64 {
