@@ -25,7 +25,61 @@ fn convex_hull_with<const N: usize, const T: usize>(
     let mut pts = [DVec2::ZERO; N];
     pts[..n].copy_from_slice(&points[..n]);
     let pts = &mut pts[..n];
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    pts.sort_by(by_x_then_y);
+    monotone_chain(pts, hull, tmp)
+}
+
+/// The order the hull's chain walks the points in: by `x`, then `y`
+/// (IEEE total order: a total order, whose ties are equal points).
+#[inline]
+fn by_x_then_y(a: &DVec2, b: &DVec2) -> std::cmp::Ordering {
+    a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y))
+}
+
+/// [`convex_hull`] of up to four points (the metrics' support polygon,
+/// every step with three or four feet down): sorted by compare–exchanges
+/// (five for four points) into the general sort's order, then the same
+/// chain, in fixed buffers: the same hull, without the general sort's
+/// loop and the buffers' library copies (about half its instructions).
+fn small_hull(points: &[DVec2], hull: &mut [DVec2; 4]) -> usize {
+    let n = points.len().min(4);
+    let mut pts = [DVec2::ZERO; 4];
+    for (d, s) in pts.iter_mut().zip(&points[..n]) {
+        *d = *s;
+    }
+    let mut exchange = |i: usize, j: usize| {
+        if by_x_then_y(&pts[i], &pts[j]).is_gt() {
+            pts.swap(i, j);
+        }
+    };
+    match n {
+        2 => exchange(0, 1),
+        3 => {
+            exchange(0, 1);
+            exchange(1, 2);
+            exchange(0, 1);
+        }
+        4 => {
+            exchange(0, 1);
+            exchange(2, 3);
+            exchange(0, 2);
+            exchange(1, 3);
+            exchange(1, 2);
+        }
+        _ => {}
+    }
+    monotone_chain(&pts[..n], hull, &mut [DVec2::ZERO; 8])
+}
+
+/// Andrew's monotone chain over `pts` sorted [`by_x_then_y`]: the hull,
+/// counter-clockwise, into `hull` (its vertex count returned), with `tmp`
+/// (at least `2 N` points) as the chain's stack.
+fn monotone_chain<const N: usize, const T: usize>(
+    pts: &[DVec2],
+    hull: &mut [DVec2; N],
+    tmp: &mut [DVec2; T],
+) -> usize {
+    let n = pts.len();
     if n < 3 {
         hull[..n].copy_from_slice(pts);
         return n;
@@ -49,7 +103,9 @@ fn convex_hull_with<const N: usize, const T: usize>(
         k += 1;
     }
     let m = (k - 1).min(N);
-    hull[..m].copy_from_slice(&tmp[..m]);
+    for (h, t) in hull.iter_mut().zip(&tmp[..m]) {
+        *h = *t;
+    }
     m
 }
 
@@ -93,10 +149,16 @@ pub fn stability_margin(contacts: &[DVec2], com_xy: DVec2) -> Option<f64> {
     if contacts.len() < 3 {
         return None;
     }
+    if contacts.len() <= 4 {
+        // four feet or fewer (the metrics' case every step with three or
+        // four in contact): the same hull from a sorting network
+        let mut hull = [DVec2::ZERO; 4];
+        let n = small_hull(contacts, &mut hull);
+        return signed_margin(&hull[..n], com_xy);
+    }
     if contacts.len() <= 8 {
-        // up to 8 feet (the metrics' case, every step with three in
-        // contact): buffers of 8 and 16 points to fill, not 16 and 64 (the
-        // same hull: `convex_hull` keeps all the points either way)
+        // up to 8 feet: buffers of 8 and 16 points to fill, not 16 and 64
+        // (the same hull: `convex_hull` keeps all the points either way)
         let mut hull = [DVec2::ZERO; 8];
         let n = convex_hull_with(contacts, &mut hull, &mut [DVec2::ZERO; 16]);
         return signed_margin(&hull[..n], com_xy);
@@ -109,6 +171,46 @@ pub fn stability_margin(contacts: &[DVec2], com_xy: DVec2) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The small hull (sorting network) is the general hull, vertex for
+    /// vertex, on sets of two to four points with repeated points,
+    /// collinear ones, signed zeros and one point inside the others.
+    #[test]
+    fn small_hull_is_the_general_hull() {
+        let grid = [-0.3, -0.0, 0.0, 0.25, 0.25, 0.7];
+        let mut sets = 0;
+        for i in 0..4000u64 {
+            let n = 2 + (i % 3) as usize;
+            let mut pts = [DVec2::ZERO; 4];
+            let mut r = i.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            for p in pts.iter_mut().take(n) {
+                let (a, b) = ((r % 6) as usize, ((r / 6) % 6) as usize);
+                *p = DVec2::new(grid[a], grid[b]);
+                r /= 36;
+            }
+            if i % 7 == 0 {
+                // a point inside the triangle of the others
+                pts[..4].copy_from_slice(&[
+                    DVec2::new(0.0, 0.0),
+                    DVec2::new(1.0, 0.0),
+                    DVec2::new(0.0, 1.0),
+                    DVec2::new(0.2, 0.3),
+                ]);
+            }
+            let pts = &pts[..if i % 7 == 0 { 4 } else { n }];
+            let (mut small, mut general) = ([DVec2::ZERO; 4], [DVec2::ZERO; 4]);
+            let ns = small_hull(pts, &mut small);
+            let ng = convex_hull_with(pts, &mut general, &mut [DVec2::ZERO; 8]);
+            let bits = |h: &[DVec2]| {
+                h.iter()
+                    .map(|p| [p.x.to_bits(), p.y.to_bits()])
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&small[..ns]), bits(&general[..ng]), "{pts:?}");
+            sets += usize::from(ns >= 3);
+        }
+        assert!(sets > 500, "proper polygons among the sets: {sets}");
+    }
 
     #[test]
     fn rectangle_margin_is_distance_to_nearest_edge() {
