@@ -216,23 +216,11 @@ impl F4 {
         let refined = lost.and(gt(PIO4)).and(gt(PIO4_9).or(near_multiple));
         let fallback = ax.cmp::<_CMP_NLT_UQ>(sp(MEDIUM_END)).or(refined);
         // kernels
-        let z = y0.mul(y0);
-        let zz = z.mul(z);
-        let rs = sp(S2)
-            .add(z.mul(sp(S3).add(z.mul(sp(S4)))))
-            .add(z.mul(zz).mul(sp(S5).add(z.mul(sp(S6)))));
-        let v = z.mul(y0);
-        let sin_iy0 = y0.add(v.mul(sp(S1).add(z.mul(rs))));
-        let t = z.mul(sp(0.5).mul(y1).sub(v.mul(rs))).sub(y1);
-        let sin_iy1 = y0.sub(t.sub(v.mul(sp(S1))));
-        let sin_r = F4::select(ax.cmp::<_CMP_LE_OQ>(sp(PIO4)), sin_iy0, sin_iy1);
-        let rc = z
-            .mul(sp(C1).add(z.mul(sp(C2).add(z.mul(sp(C3))))))
-            .add(zz.mul(zz).mul(sp(C4).add(z.mul(sp(C5).add(z.mul(sp(C6)))))));
-        let hz = sp(0.5).mul(z);
-        let wc = one.sub(hz);
-        let tail = z.mul(rc).sub(y0.mul(y1));
-        let cos_r = wc.add(one.sub(wc).sub(hz).add(tail));
+        let k = Self::kernels(y0, y1);
+        let t = k.z.mul(sp(0.5).mul(y1).sub(k.v.mul(k.rs))).sub(y1);
+        let sin_iy1 = y0.sub(t.sub(k.v.mul(sp(S1))));
+        let sin_r = F4::select(ax.cmp::<_CMP_LE_OQ>(sp(PIO4)), k.sin_iy0, sin_iy1);
+        let cos_r = k.cos;
         // quadrant from the low bits of n + 1.5·2⁵² and n + 1 + 1.5·2⁵²
         let zero = sp(0.0);
         let qa = f_n.add(sp(TO_INT));
@@ -268,26 +256,56 @@ impl F4 {
     #[inline]
     #[target_feature(enable = "avx")]
     fn sin_cos_within_pio4(x: Self, ax: Self) -> (Self, Self) {
+        use crate::trig::TINY;
+        let k = Self::kernels(x, F4::splat(0.0));
+        let tiny = ax.cmp::<_CMP_LT_OQ>(F4::splat(TINY));
+        (
+            F4::select(tiny, x, k.sin_iy0),
+            F4::select(tiny, F4::splat(1.0), k.cos),
+        )
+    }
+
+    /// msun's `__sin(y0, y1, 0)` and `__cos(y0, y1)` per lane on the reduced
+    /// argument `y0 + y1`, with what `__sin(.., 1)` needs besides.
+    #[inline]
+    #[target_feature(enable = "avx")]
+    fn kernels(y0: Self, y1: Self) -> Kernels {
         use crate::trig::*;
         let sp = F4::splat;
-        let (one, y0, y1) = (sp(1.0), x, sp(0.0));
+        let one = sp(1.0);
         let z = y0.mul(y0);
         let zz = z.mul(z);
         let rs = sp(S2)
             .add(z.mul(sp(S3).add(z.mul(sp(S4)))))
             .add(z.mul(zz).mul(sp(S5).add(z.mul(sp(S6)))));
         let v = z.mul(y0);
-        let sin_r = y0.add(v.mul(sp(S1).add(z.mul(rs))));
+        let sin_iy0 = y0.add(v.mul(sp(S1).add(z.mul(rs))));
         let rc = z
             .mul(sp(C1).add(z.mul(sp(C2).add(z.mul(sp(C3))))))
             .add(zz.mul(zz).mul(sp(C4).add(z.mul(sp(C5).add(z.mul(sp(C6)))))));
         let hz = sp(0.5).mul(z);
         let wc = one.sub(hz);
         let tail = z.mul(rc).sub(y0.mul(y1));
-        let cos_r = wc.add(one.sub(wc).sub(hz).add(tail));
-        let tiny = ax.cmp::<_CMP_LT_OQ>(sp(TINY));
-        (F4::select(tiny, x, sin_r), F4::select(tiny, one, cos_r))
+        let cos = wc.add(one.sub(wc).sub(hz).add(tail));
+        Kernels {
+            z,
+            rs,
+            v,
+            sin_iy0,
+            cos,
+        }
     }
+}
+
+/// [`F4::kernels`]' results: `z = y0²`, the sine's polynomial `rs`, `v = z
+/// y0`, the sine for `y1` = 0 (`__sin(y0, y1, 0)`) and the cosine.
+#[derive(Clone, Copy)]
+struct Kernels {
+    z: F4,
+    rs: F4,
+    v: F4,
+    sin_iy0: F4,
+    cos: F4,
 }
 
 /// A 3-vector per lane (glam's `DVec3`).
