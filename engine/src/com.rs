@@ -85,7 +85,7 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
 /// order of the same sums (the values agree within round-off, not to the
 /// bit, with [`com_and_velocity`], which the controller reads), and every
 /// path gives its bits: the lanes' sums where `data` holds them, otherwise the
-/// same sums in scalar code ([`leg_mass_sums_scalar`]), whatever filled the
+/// same sums in scalar code (`leg_mass_sums_scalar`), whatever filled the
 /// kinematics (robot batches, either build). Other models: [`com_and_velocity`].
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn com_and_velocity_by_legs(model: &Model, data: &Data) -> (DVec3, DVec3) {

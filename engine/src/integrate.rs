@@ -4,11 +4,12 @@
 //! evaluation* (one for semi-implicit Euler, four for RK4) runs, at the stage
 //! state:
 //!
-//! 1. [`forward_kinematics`] and a cleared `data.f_ext`;
+//! 1. [`forward_kinematics`] and cleared external forces ([`Data::clear_external_forces`]);
 //! 2. `τ = sat(τ_actuator) + τ_passive(q, v)` ([`crate::passive`]); with an
 //!    [`ActuatorBank`], each motor's torque inside its torque–speed envelope
 //!    at this `q̇` plus its friction ([`crate::actuator_model`]);
-//! 3. the caller's [`ForceModel`], which adds contact/push forces to `data.f_ext`
+//! 3. the caller's [`ForceModel`], which adds contact/push forces to the bodies'
+//!    external forces ([`Data::add_external_force`])
 //!    and generalised forces to `τ`;
 //! 4. [`crate::aba::aba_from_kinematics`] for `v̇`, or, when the workspace carries
 //!    [`ImposedJoints`] (hybrid dynamics), [`hybrid_acceleration`]: the joint
@@ -129,8 +130,9 @@ pub enum StateError {
 /// (each RK4 stage).
 ///
 /// Called after `forward_kinematics(model, data, q, v)` at the stage state, with
-/// `data.f_ext` cleared. It adds spatial forces to `data.f_ext` (world axes,
-/// about `data.origin`; see [`Data::add_point_force`]) and generalised forces to
+/// the external forces cleared. It adds spatial forces (world axes, about
+/// `data.origin`) with [`Data::add_point_force`] or [`Data::add_external_force`]
+/// (read back with [`Data::external_forces`]) and generalised forces to
 /// `tau` (nv, pre-filled with saturated actuator and passive torques). It must
 /// not mutate persistent contact state (tangential anchors and the like are
 /// updated once per step by the caller, after [`step`]).

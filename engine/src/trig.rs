@@ -319,7 +319,7 @@ pub(crate) fn kinematics_sin_cos_lanes<const L: usize>(x: [f64; L]) -> ([f64; L]
     }
 }
 
-/// glam's `DMat3::from_axis_angle` with [`kinematics_sin_cos`]: the rotation
+/// glam's `DMat3::from_axis_angle` with `kinematics_sin_cos`: the rotation
 /// by `angle` (rad) about the unit `axis`, operation for operation as glam
 /// computes it (so glam's own matrix while [`DYNAMICS_USE_LIBM`] is off).
 #[inline]

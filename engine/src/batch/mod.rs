@@ -266,7 +266,7 @@ impl<const L: usize> BatchData<L> {
     }
 
     /// Writes robot `lane`'s external forces (nbodies; world axes about its
-    /// base origin, as [`crate::Data::f_ext`] after kinematics).
+    /// base origin, as [`crate::Data::external_forces`] after kinematics).
     ///
     /// # Panics
     /// If the length is wrong or `lane ≥ L`.

@@ -410,7 +410,7 @@ fn tangential_force(
 /// `data` (after [`crate::kinematics::forward_kinematics`]). Pure in the
 /// persistent state: call it at every RK4 stage. `out`, when given (same
 /// length as `points`), receives each evaluation. (Its x86-64-v3 clone,
-/// with [`cached_force`] forced inline into it, spares register copies; no
+/// with `cached_force` forced inline into it, spares register copies; no
 /// fused multiply–add, so both give the same bits.)
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn contact_forces(

@@ -350,7 +350,7 @@ fn foot_constraints(params: &ForceQpParams, foot: &StanceFoot) -> [(DVec3, f64);
 /// construction. The QP's arrays and the solver's workspace (7.6 KiB, sized
 /// for four feet) hold nothing from one solve to the next (every entry a
 /// solve reads, it first writes), so one per thread serves every robot
-/// stepped on that thread instead of one per robot ([`WORKSPACE`]).
+/// stepped on that thread instead of one per robot (`WORKSPACE`).
 #[derive(Clone, Debug)]
 pub struct ForceQp {
     /// Weights and bounds.

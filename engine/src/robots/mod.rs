@@ -16,7 +16,7 @@
 //! Every length, radius, mass, mount offset, leg angle and actuator limit is a
 //! parameter addressed by a dotted path (`thigh.length_m`); each robot module
 //! documents its table (unit, default, meaning) and how dependent quantities
-//! follow a change (CoM, inertia, mass). [`params`] returns the table,
+//! follow a change (CoM, inertia, mass). [`params()`] returns the table,
 //! [`builtin_with`] applies overrides:
 //!
 //! ```
