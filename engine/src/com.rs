@@ -2,7 +2,7 @@
 
 use crate::data::Data;
 use crate::model::Model;
-use crate::spatial::Force;
+use crate::spatial::{Force, Motion, RigidInertia};
 use glam::DVec3;
 
 /// Centre of mass of the whole robot in the world (m). Needs kinematics (positions) first.
@@ -66,10 +66,10 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
     let mut m = 0.0;
     let vel = &data.vel[..n];
     data.for_each_body_inertia(model, |i, ri| {
-        let v = &vel[i];
-        mc += ri.com * ri.mass;
+        let (mci, pi) = com_terms(&ri, &vel[i]);
+        mc += mci;
         m += ri.mass;
-        p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
+        p += pi;
     });
     if m > 0.0 {
         (data.origin + mc / m, p / m)
@@ -101,7 +101,7 @@ pub fn com_and_velocity_by_legs(model: &Model, data: &Data) -> (DVec3, DVec3) {
             },
             _ => {},
         }
-        return add_base(model, data, &leg_mass_sums_scalar(data, model, plan));
+        return add_base(model, data, &leg_mass_sums_scalar(model, data, plan));
     }
     com_and_velocity(model, data)
 }
@@ -112,8 +112,8 @@ pub fn com_and_velocity_by_legs(model: &Model, data: &Data) -> (DVec3, DVec3) {
 /// `[m, mc.x, mc.y, mc.z, p.x, p.y, p.z][k]`.
 #[cfg(target_arch = "x86_64")]
 pub(crate) fn leg_mass_sums_scalar(
-    data: &Data,
     model: &Model,
+    data: &Data,
     plan: &crate::leg_lanes::LegLanes,
 ) -> [[f64; crate::leg_lanes::LEGS]; 7] {
     let mut out = [[0.0; crate::leg_lanes::LEGS]; 7];
@@ -121,10 +121,11 @@ pub(crate) fn leg_mass_sums_scalar(
         let (mut m, mut mc, mut p) = (0.0, DVec3::ZERO, DVec3::ZERO);
         for grp in &plan.groups {
             let i = grp[k];
-            let (ri, v) = (data.body_inertia(model, i), data.vel[i]);
-            mc += ri.com * ri.mass;
+            let ri = data.body_inertia(model, i);
+            let (mci, pi) = com_terms(&ri, &data.vel[i]);
+            mc += mci;
             m += ri.mass;
-            p += (v.lin + v.ang.cross(ri.com)) * ri.mass;
+            p += pi;
         }
         for (o, x) in out.iter_mut().zip([m, mc.x, mc.y, mc.z, p.x, p.y, p.z]) {
             o[k] = x;
@@ -142,10 +143,9 @@ fn add_base(
     data: &Data,
     legs: &[[f64; crate::leg_lanes::LEGS]; 7],
 ) -> (DVec3, DVec3) {
-    let (ri, v) = (data.body_inertia(model, 0), data.vel[0]);
+    let ri = data.body_inertia(model, 0);
     let mut m = ri.mass;
-    let mut mc = ri.com * ri.mass;
-    let mut p = (v.lin + v.ang.cross(ri.com)) * ri.mass;
+    let (mut mc, mut p) = com_terms(&ri, &data.vel[0]);
     for k in 0..crate::leg_lanes::LEGS {
         m += legs[0][k];
         mc += DVec3::new(legs[1][k], legs[2][k], legs[3][k]);
@@ -158,14 +158,21 @@ fn add_base(
     }
 }
 
+/// One body's terms of the CoM sums: its first moment `m c` and linear
+/// momentum `m (v + ω × c)` (`c` its CoM relative to the reference point;
+/// the lanes' `leg_mass_sums` forms them operation for operation).
+#[inline]
+fn com_terms(ri: &RigidInertia, v: &Motion) -> (DVec3, DVec3) {
+    (ri.com * ri.mass, (v.lin + v.ang.cross(ri.com)) * ri.mass)
+}
+
 /// Linear momentum `Σ mᵢ (vᵢ + ωᵢ × cᵢ)` (kg·m/s, world): the linear part of
 /// [`spatial_momentum`], the same sum in the same order without the angular
 /// part's inertia products (the CoM velocity is read every step).
 pub fn linear_momentum(model: &Model, data: &Data) -> DVec3 {
     let mut p = DVec3::ZERO;
     for i in 0..model.nbodies {
-        let (inertia, v) = (&data.body_inertia(model, i), data.vel[i]);
-        p += (v.lin + v.ang.cross(inertia.com)) * inertia.mass;
+        p += com_terms(&data.body_inertia(model, i), &data.vel[i]).1;
     }
     p
 }
@@ -223,7 +230,7 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         {
             let plan = model.leg_lanes.as_ref().expect("quad16's legs in lanes");
-            let (cs, vcs) = add_base(&model, &data, &leg_mass_sums_scalar(&data, &model, plan));
+            let (cs, vcs) = add_base(&model, &data, &leg_mass_sums_scalar(&model, &data, plan));
             assert_eq!(c.to_array(), cs.to_array());
             assert_eq!(vc.to_array(), vcs.to_array());
             // the lanes were there to read, on a CPU with them

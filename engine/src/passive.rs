@@ -90,12 +90,16 @@ pub fn friction_torque(friction: f64, qd: f64, epsilon: f64) -> f64 {
 /// Soft-limit torque: zero inside `[lower, upper]`; beyond it a spring–damper
 /// `−k·(q − limit) − b·q̇` that only ever pushes back into the range (the
 /// damper never pulls the joint outward, so the limit is not sticky).
+/// Both sides are formed and one picked, without branches, so that a loop
+/// over the joints vectorises.
 #[inline]
 pub fn limit_torque(q: f64, qd: f64, lower: f64, upper: f64, stiffness: f64, damping: f64) -> f64 {
+    let above = (-stiffness * (q - upper) - damping * qd).min(0.0);
+    let below = (stiffness * (lower - q) - damping * qd).max(0.0);
     if q > upper {
-        (-stiffness * (q - upper) - damping * qd).min(0.0)
+        above
     } else if q < lower {
-        (stiffness * (lower - q) - damping * qd).max(0.0)
+        below
     } else {
         0.0
     }
@@ -151,7 +155,7 @@ pub fn add_passive_torques(
     // Without friction (off, or zero on every joint, the usual model), the
     // loop without its branches, which vectorises: each joint's terms as
     // below (a zero friction term added to `0.0 + damping`, never −0.0,
-    // changes nothing), the limit's two sides both formed and one picked.
+    // changes nothing).
     if !params.friction || friction.iter().all(|&f| f == 0.0) {
         let (k, b) = (params.limit_stiffness, params.limit_damping);
         for (((((tau, &q), &qd), &d), &lo), &hi) in tau_j
@@ -169,16 +173,7 @@ pub fn add_passive_torques(
                     0.0
                 };
             if params.limits {
-                // `limit_torque`'s expressions
-                let above = (-k * (q - hi) - b * qd).min(0.0);
-                let below = (k * (lo - q) - b * qd).max(0.0);
-                t += if q > hi {
-                    above
-                } else if q < lo {
-                    below
-                } else {
-                    0.0
-                };
+                t += limit_torque(q, qd, lo, hi, k, b);
             }
             *tau += t;
         }
