@@ -569,10 +569,11 @@ pub(crate) fn aba_passes_legs(
     GROUP_ABA.with(|cell| drop(cell.replace((work_all, kin_all))));
 }
 
-/// `Iᴬ v` for one group, `ia` read from memory. Not inlined, like
-/// [`downdate_into`]: inlined, LLVM kept Iᴬ's 27 registers live across the
-/// whole group and spilled them.
-#[inline(never)]
+/// `Iᴬ v` for one group, `ia` read from memory. Like [`downdate_into`] it
+/// is inlined: rustc (1.95) drops `#[inline(never)]` on `#[target_feature]`
+/// functions, and kept out of line (`#[cold]`) both made 256 robots on 2
+/// threads 2.4 % slower (six pairs, 2026-11-27; an earlier build spilled
+/// Iᴬ's 27 registers when they were inlined, this one no longer does).
 #[target_feature(enable = "avx")]
 fn sym6_mul_motion(ia: &Sym6x4, v: &Motion4) -> Force4 {
     ia.mul_motion(*v)
@@ -581,7 +582,7 @@ fn sym6_mul_motion(ia: &Sym6x4, v: &Motion4) -> Force4 {
 /// ABA's downdate of one group in place: `ia ← own + (ia − U Uᵀ/D)`, the
 /// parent's Iᴬ (its own rigid inertia `own` plus its one child's term, in
 /// the general path's order), or the term alone for the hips (`own` none).
-#[inline(never)]
+/// Inlined (see [`sym6_mul_motion`]).
 #[target_feature(enable = "avx")]
 fn downdate_into(ia: &mut Sym6x4, u: &Force4, d_inv: F4, own: Option<&Inertia4>) {
     let ul = u.lin.scale(d_inv);

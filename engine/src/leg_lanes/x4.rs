@@ -176,10 +176,10 @@ impl F4 {
     /// `sincos`): [`crate::trig::sin_cos_lanes`]' operations, each one AVX
     /// instruction (that function's plain-Rust lane loops do not all
     /// vectorise); lanes that need libm's second reduction round or large
-    /// argument path call it. Not inlined (a large body; with `#[inline]`
-    /// LLVM kept it out of line from the pose loops too), so the pose loops
-    /// around `avx::rotate_about_axis!` stay small.
-    #[inline(never)]
+    /// argument path call it. Out of line (LLVM's choice for a body this
+    /// large: rustc drops `#[inline(never)]` on `#[target_feature]`
+    /// functions), so the pose loops around `avx::rotate_about_axis!` stay
+    /// small.
     #[target_feature(enable = "avx")]
     pub fn sin_cos(self) -> (Self, Self) {
         use crate::trig::*;
