@@ -572,8 +572,8 @@ pub(crate) fn aba_passes_legs(
 /// `Iᴬ v` for one group, `ia` read from memory. Like [`downdate_into`] it
 /// is inlined: rustc (1.95) drops `#[inline(never)]` on `#[target_feature]`
 /// functions, and kept out of line (`#[cold]`) both made 256 robots on 2
-/// threads 2.4 % slower (six pairs, 2026-11-27; an earlier build spilled
-/// Iᴬ's 27 registers when they were inlined, this one no longer does).
+/// threads 2.4 % slower (six pairs, 2026-11-27). (When the attribute was
+/// written, inlining had kept Iᴬ's 27 registers live across the group.)
 #[target_feature(enable = "avx")]
 fn sym6_mul_motion(ia: &Sym6x4, v: &Motion4) -> Force4 {
     ia.mul_motion(*v)
