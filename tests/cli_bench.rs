@@ -60,7 +60,17 @@ fn bench_reports_throughput_and_memory_per_robot() {
     let rtf = last["real_time_factor"].as_f64().unwrap();
     assert!((rtf - rate / 4.0 * 0.0005).abs() < 1e-9 * rtf, "{last}");
     assert_eq!(last["points"].as_array().unwrap().len(), 4, "{last}");
+    // the build the figures are of: this test is compiled with the binary's
+    // flags, so a build for the CPU (target-cpu with AVX2 and FMA) is "cpu"
+    let build = if cfg!(all(target_feature = "avx2", target_feature = "fma")) {
+        "cpu"
+    } else {
+        "portable"
+    };
+    assert_eq!(last["build"], build, "{last}");
+    assert!(stdout.starts_with("build: "), "{stdout}");
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(v["build"], build, "{v}");
     let points = v["points"].as_array().unwrap();
     assert_eq!(points.len(), 4);
     for p in points {

@@ -88,8 +88,9 @@ def quadsim_herd(exe: Path, robots: int, steps: int, blocks: int) -> tuple[float
     return two, two / points[1]["robot_steps_per_s"]
 
 
-def quadsim_us_per_step(exe: Path, steps: int, blocks: int, sensing: str) -> float:
-    """`quadsim bench` for one robot on one thread: µs per step (median block)."""
+def quadsim_us_per_step(exe: Path, steps: int, blocks: int, sensing: str) -> tuple[float, str]:
+    """`quadsim bench` for one robot on one thread: µs per step (median block), and the
+    build the binary is ("portable" or "cpu": README, "The build for the CPU")."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "bench.json"
         subprocess.run(
@@ -97,8 +98,8 @@ def quadsim_us_per_step(exe: Path, steps: int, blocks: int, sensing: str) -> flo
              "--repeats", str(blocks), "--sensing", sensing, "--json", str(out)],
             check=True, stdout=subprocess.DEVNULL,
         )
-        point = json.loads(out.read_text())["points"][0]
-    return point["us_per_robot_step"]
+        report = json.loads(out.read_text())
+    return report["points"][0]["us_per_robot_step"], report.get("build", "unknown")
 
 
 def main() -> int:
@@ -127,8 +128,8 @@ def main() -> int:
           f" {'exact-state µs':>14} {'ratio':>6}")
     for r in range(a.rounds):
         mj, ncon = mujoco_us_per_step(a.model, a.steps, a.blocks)
-        qs = quadsim_us_per_step(a.quadsim, a.steps, a.blocks, "estimated")
-        gt = quadsim_us_per_step(a.quadsim, a.steps, a.blocks, "ground-truth")
+        qs, build = quadsim_us_per_step(a.quadsim, a.steps, a.blocks, "estimated")
+        gt, _ = quadsim_us_per_step(a.quadsim, a.steps, a.blocks, "ground-truth")
         rounds.append({"mujoco_us_per_step": mj, "mujoco_contacts": ncon,
                        "quadsim_us_per_step": qs, "quadsim_ground_truth_us_per_step": gt,
                        "ratio": mj / qs, "ratio_ground_truth": mj / gt})
@@ -147,9 +148,9 @@ def main() -> int:
             print(f"warning: MuJoCo's quad16 has {ncon} contacts, not its four feet", file=sys.stderr)
     ratios = [x["ratio"] for x in rounds]
     print(f"quadsim's step rate / MuJoCo's: {min(ratios):.2f}–{max(ratios):.2f}× "
-          f"(median {statistics.median(ratios):.2f}×; target ≥ 3×)")
+          f"(median {statistics.median(ratios):.2f}×; target ≥ 3×; quadsim's {build} build)")
     print(json.dumps({"rounds": rounds, "ratio_median": statistics.median(ratios),
-                      "load_average": os.getloadavg()[0]}))
+                      "quadsim_build": build, "load_average": os.getloadavg()[0]}))
     return 0
 
 

@@ -263,6 +263,8 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
         }
     }
     bar.finish_and_clear();
+    let build = Build::of_this_binary();
+    println!("build: {}", build.describe());
     println!(
         "{} ({}; controller on the {} state), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
         a.model,
@@ -322,6 +324,8 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
         let v: Value = json!({
             "model": a.model,
             "sensing": a.sensing.name(),
+            "build": build.name(),
+            "static_features": build.static_features,
             "steps_per_block": a.steps,
             "repeats": a.repeats,
             "warmup_steps": a.warmup,
@@ -339,7 +343,78 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     // keys), with every configuration under `points`.
     let mut last = rows.last().cloned().unwrap_or_else(|| json!({}));
     last["sensing"] = json!(a.sensing.name());
+    last["build"] = json!(build.name());
     last["points"] = Value::Array(rows);
     println!("{last}");
     Ok(())
+}
+
+/// Which build of quadsim the figures are of (README, "The build for the
+/// CPU"): both give the same bits, not the same speed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Build {
+    /// The SIMD features this binary was compiled to require (`avx2`, `fma`,
+    /// `avx512f`, `avx512vl`; empty for baseline x86-64 or another
+    /// architecture).
+    pub static_features: Vec<&'static str>,
+    /// Whether this CPU has what the dispatched passes' AVX2 clones need
+    /// (AVX2 and FMA), so that quad16's legs run in SIMD lanes.
+    pub lanes_on_this_cpu: bool,
+}
+
+impl Build {
+    /// This binary's build, on the CPU it runs on.
+    pub fn of_this_binary() -> Build {
+        let mut static_features = Vec::new();
+        for (on, name) in [
+            (cfg!(target_feature = "avx2"), "avx2"),
+            (cfg!(target_feature = "fma"), "fma"),
+            (cfg!(target_feature = "avx512f"), "avx512f"),
+            (cfg!(target_feature = "avx512vl"), "avx512vl"),
+        ] {
+            if on {
+                static_features.push(name);
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        let lanes_on_this_cpu = std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma");
+        #[cfg(not(target_arch = "x86_64"))]
+        let lanes_on_this_cpu = false;
+        Build {
+            static_features,
+            lanes_on_this_cpu,
+        }
+    }
+
+    /// `"cpu"` for a build that requires AVX2 and FMA (such as
+    /// `RUSTFLAGS="-C target-cpu=native"` on this machine), else
+    /// `"portable"` (the default build, which picks its AVX2 clones at run
+    /// time).
+    pub fn name(&self) -> &'static str {
+        let needs = |f| self.static_features.contains(&f);
+        if needs("avx2") && needs("fma") {
+            "cpu"
+        } else {
+            "portable"
+        }
+    }
+
+    /// One line for the table's header.
+    pub fn describe(&self) -> String {
+        match self.name() {
+            "cpu" => format!(
+                "for the CPU (requires {}; the portable build's bits)",
+                self.static_features.join(", ")
+            ),
+            _ => format!(
+                "portable ({}; `benches/cpu_build.sh` builds one for this CPU)",
+                if self.lanes_on_this_cpu {
+                    "AVX2 clones chosen at run time on this CPU"
+                } else {
+                    "this CPU has no AVX2 and FMA: the scalar paths"
+                }
+            ),
+        }
+    }
 }
