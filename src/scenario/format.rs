@@ -326,7 +326,7 @@ pub struct PayloadSpec {
     pub mass_kg: f64,
     /// `box` (default), `sphere` or `cylinder` (axis along torso z).
     pub shape: Option<String>,
-    /// Box: [x, y, z] side lengths; sphere: [radius]; cylinder: [radius, length] (m).
+    /// Box: `[x, y, z]` side lengths; sphere: `[radius]`; cylinder: `[radius, length]` (m).
     pub size_m: Vec<f64>,
     /// Centre of the payload from the torso centre, torso axes (m).
     #[serde(default)]

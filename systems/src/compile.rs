@@ -39,14 +39,14 @@ pub struct DirtyRobots {
     /// Roots whose description changed (may repeat).
     pub robots: Vec<Entity>,
     /// Link, joint and shape entities whose description components were
-    /// inserted since the last compile ([`note_part_edit`]; may repeat).
+    /// inserted since the last compile (`note_part_edit`; may repeat).
     pub parts: Vec<Entity>,
     /// Entities that lost an optional description component
-    /// ([`RemovableParts`]) since the last compile ([`note_part_removal`];
+    /// (`RemovableParts`) since the last compile (`note_part_removal`;
     /// may repeat).
     pub removed: Vec<Entity>,
     /// A robot was despawned: drop its slot and renumber [`RobotIndex`]
-    /// ([`note_robot_removal`]).
+    /// (`note_robot_removal`).
     pub prune: bool,
 }
 
@@ -211,8 +211,8 @@ pub fn note_robot_removal(_removal: On<Remove<Robot>>, mut dirty: ResMut<DirtyRo
     dirty.prune = true;
 }
 
-/// Registers [`note_part_edit`], [`note_shape_detach`], [`note_part_removal`]
-/// and [`note_robot_removal`] (once per world, before any robot is spawned).
+/// Registers `note_part_edit`, `note_shape_detach`, `note_part_removal`
+/// and `note_robot_removal` (once per world, before any robot is spawned).
 pub fn add_edit_observers(world: &mut World) {
     world.add_observer(note_part_edit);
     world.add_observer(note_shape_detach);
@@ -236,8 +236,8 @@ fn part_owner(
 
 /// Collects the robots whose description changed since the last run: roots
 /// by bevy change detection (one entity per robot), parts from the
-/// [`note_part_edit`] and [`note_part_removal`] observers (despawned robots
-/// were flagged by [`note_robot_removal`]). A changed [`SimConfig`]
+/// `note_part_edit` and `note_part_removal` observers (despawned robots
+/// were flagged by `note_robot_removal`). A changed [`SimConfig`]
 /// (gravity, passive model) marks every robot. With nothing edited, this
 /// costs a few instructions per robot (the roots' change ticks), not a scan
 /// of every part.
@@ -351,7 +351,7 @@ impl CompileGate {
 ///
 /// A recompiled robot keeps its state `(q, v)` and actuator command when nq and
 /// nv are unchanged, or when only its compliant payloads changed (see
-/// [`carry_over_loads`]); otherwise it restarts at the neutral
+/// `carry_over_loads`); otherwise it restarts at the neutral
 /// configuration, at rest.
 pub fn compile_dirty_robots(world: &mut World) {
     {
