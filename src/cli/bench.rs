@@ -376,14 +376,9 @@ impl Build {
                 static_features.push(name);
             }
         }
-        #[cfg(target_arch = "x86_64")]
-        let lanes_on_this_cpu = std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma");
-        #[cfg(not(target_arch = "x86_64"))]
-        let lanes_on_this_cpu = false;
         Build {
             static_features,
-            lanes_on_this_cpu,
+            lanes_on_this_cpu: quadsim_engine::leg_lanes::cpu_has_lanes(),
         }
     }
 

@@ -173,13 +173,13 @@ pub fn runs_on(m: &Model) -> bool {
 
 /// Whether this CPU has what the lanes' clones need (AVX2 and FMA).
 #[cfg(target_arch = "x86_64")]
-fn cpu_has_lanes() -> bool {
+pub fn cpu_has_lanes() -> bool {
     std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 /// No lanes off x86-64.
 #[cfg(not(target_arch = "x86_64"))]
-fn cpu_has_lanes() -> bool {
+pub fn cpu_has_lanes() -> bool {
     false
 }
 
