@@ -8,13 +8,14 @@
 #
 #   benches/cpu_build.sh [seconds]    # simulated seconds per scenario (default 2)
 #
-# CI runs it (.ci/run). The portable binary is built first if needed
-# (cargo build --release).
+# CI runs it (.ci/run) with CPU_BUILD_RUSTFLAGS="-D warnings", which is
+# added to the native build's flags. The portable binary is built first if
+# needed (cargo build --release).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-2}"
 cargo build --release --quiet --bin quadsim
-RUSTFLAGS="-C target-cpu=native" cargo build --release --quiet --bin quadsim --target-dir target/native
+RUSTFLAGS="-C target-cpu=native ${CPU_BUILD_RUSTFLAGS:-}" cargo build --release --quiet --bin quadsim --target-dir target/native
 portable=target/release/quadsim
 native=target/native/release/quadsim
 out=target/cpu-build-bits
