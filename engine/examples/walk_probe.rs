@@ -97,6 +97,9 @@ fn main() {
         p.gait =
             quadsim_engine::gait::Gait::trot_from_supports(per, four, per / 2.0 - four).unwrap();
     }
+    if let (Some(per), Some(duty)) = (env("PERIOD"), env("DUTY")) {
+        p.gait = Gait::of_kind(GaitKind::Trot, per, duty).unwrap();
+    }
     if let Some(x) = env("LIFT") {
         p.lift_height_m = x;
     }
@@ -146,6 +149,34 @@ fn main() {
     }
     if let Some(x) = env("KRD") {
         p.vmc.gains.damping_nms_per_rad *= x;
+    }
+    if std::env::var("WB").is_ok() {
+        p.whole_body = true;
+    }
+    if let Some(x) = env("WBF") {
+        p.wbc.force_weight = x;
+    }
+    if let Some(x) = env("WBL") {
+        p.wbc.base_linear_weight = x;
+    }
+    if let Some(x) = env("AMAX") {
+        p.swing_max_acc_mps2 = x;
+    }
+    if let Some(x) = env("PKP") {
+        p.posture_gains = (x, 2.0 * x.sqrt());
+    }
+    if let Some(x) = env("WBZ") {
+        p.wbc.base_vertical_weight = x;
+    }
+    if let Some(x) = env("WBC") {
+        p.wbc.contact_velocity_gain = x;
+    }
+    if let Some(x) = env("WBA") {
+        p.wbc.base_angular_weight = x;
+    }
+    if let Some(x) = env("SKP") {
+        p.swing_task_gains.0 = x;
+        p.swing_task_gains.1 = env("SKD").unwrap_or(2.0 * x.sqrt());
     }
     if let Ok(g) = std::env::var("GAIT") {
         let kind = match g.as_str() {

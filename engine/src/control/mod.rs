@@ -8,3 +8,4 @@ pub mod joint_pd;
 pub mod prescribed;
 pub mod vmc;
 pub mod walker;
+pub mod wbc;

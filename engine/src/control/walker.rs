@@ -54,6 +54,7 @@ use glam::{DMat3, DVec2, DVec3};
 use super::force_qp::{FootForces, ForceQp, ForceQpParams, MAX_FEET, StanceFoot, stance_torques};
 use super::joint_pd::bandwidth_gains;
 use super::vmc::{Vmc, VmcCommand, VmcInput, VmcParams};
+use super::wbc::{BodyTask, ContactTask, JointTask, PointTask, WbcParams, WholeBody};
 
 /// Everything that configures a [`Walker`].
 #[derive(Clone, Debug, PartialEq)]
@@ -152,6 +153,24 @@ pub struct WalkerParams {
     /// which its foot cannot reach (the leg's 50 mm offset l1 keeps the foot
     /// at least that far from it): there it is the stance foot's position.
     pub placement_hips_m: Vec<DVec3>,
+    /// Whether the whole-body layer ([`super::wbc`]) turns the planned forces
+    /// and the swing references into torques through the full `M(q)` and
+    /// `h(q, v)`; `false`: today's `τ = τ_id − Jᵀ f` with swing-joint PD.
+    pub whole_body: bool,
+    /// The whole-body layer's weights.
+    pub wbc: WbcParams,
+    /// Swing-foot task gains of the whole-body layer: stiffness (1/s²) and
+    /// damping (1/s) on the foot's position and velocity error (world).
+    pub swing_task_gains: (f64, f64),
+    /// Largest acceleration (m/s², world) a swing foot's task asks for (≤ 0:
+    /// none). A reference the legs' torque limits cannot follow (quad16's
+    /// 4.5 kg legs over Study A's 0.15 s swing) is then tracked late instead
+    /// of driving the joints into saturation, which breaks the dynamics the
+    /// stance forces were planned with.
+    pub swing_max_acc_mps2: f64,
+    /// Joint-posture gains (1/s², 1/s) of the whole-body layer for joints the
+    /// feet's tasks leave free (a 4-DOF leg's ankle).
+    pub posture_gains: (f64, f64),
 }
 
 impl WalkerParams {
@@ -239,6 +258,11 @@ impl WalkerParams {
             swing_in_level_frame: true,
             knee_guard_rad: 0.5,
             placement_hips_m: placement_hips(desc, model, &stance),
+            whole_body: false,
+            wbc: WbcParams::default(),
+            swing_task_gains: (900.0, 60.0),
+            posture_gains: (400.0, 40.0),
+            swing_max_acc_mps2: 0.0,
         }
     }
 }
@@ -395,6 +419,8 @@ pub struct Walker {
     /// Low-passed CoM velocity (heading frame) for foot placement.
     v_filt: DVec2,
     v_filt_init: bool,
+    /// The whole-body layer's workspace (when [`WalkerParams::whole_body`]).
+    wbc: Option<Box<WholeBody>>,
 }
 
 impl Walker {
@@ -495,6 +521,9 @@ impl Walker {
             command_set: params.command,
             v_filt: DVec2::ZERO,
             v_filt_init: false,
+            wbc: params
+                .whole_body
+                .then(|| Box::new(WholeBody::new(model, params.wbc))),
             params,
         })
     }
@@ -947,6 +976,11 @@ impl Walker {
             Err(_) => [DVec3::ZERO; MAX_FEET],
         };
 
+        if self.wbc.is_some() {
+            self.whole_body_torques(model, data, q, v, input, &lanes_second, &second, tau_joints);
+            return;
+        }
+
         // 7. stance torques τ = −Jᵀ f (zero for unloaded or swinging feet)
         let mut pts = [(0usize, DVec3::ZERO); MAX_FEET];
         for i in 0..nl {
@@ -1002,6 +1036,166 @@ impl Walker {
 }
 
 impl Walker {
+    /// Steps 7–8 under the whole-body layer: stance feet that touch carry the
+    /// planned forces as contacts; swing feet (and planned stance feet off
+    /// the ground, pressed back down) track their references as point tasks;
+    /// a 4-DOF leg's ankle keeps its level angle as a posture task. The
+    /// torques are clamped to the effort limits.
+    #[allow(clippy::too_many_arguments)]
+    fn whole_body_torques(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        input: &WalkerInput<'_>,
+        lanes_second: &Option<[[f64; 4]; 4]>,
+        second: &[DVec3; MAX_FEET],
+        tau_joints: &mut [f64],
+    ) {
+        let nl = self.legs.len();
+        let nv0 = model.base_nv();
+        let (kp, kd) = self.params.swing_task_gains;
+        let (pkp, pkd) = self.params.posture_gains;
+        let empty = ContactTask {
+            body: 0,
+            point_m: DVec3::ZERO,
+            normal: DVec3::Z,
+            friction: 0.0,
+            load: 0.0,
+            force_plan_n: DVec3::ZERO,
+        };
+        let mut contacts = [empty; MAX_FEET];
+        let mut contact_leg = [0usize; MAX_FEET];
+        let mut nc = 0;
+        let mut points = [PointTask {
+            body: 0,
+            point_m: DVec3::ZERO,
+            acc_mps2: DVec3::ZERO,
+        }; MAX_FEET];
+        let mut np = 0;
+        let mut joints = [JointTask {
+            v_index: 0,
+            acc_radps2: 0.0,
+        }; MAX_FEET];
+        let mut nj = 0;
+        for i in 0..nl {
+            let li = self.leg_info[i];
+            let leg = self.scheduler.leg(i);
+            let touching = input.contacts.get(i).copied().unwrap_or(true);
+            let p = self.feet_world[i];
+            let vel = data.vel[li.body].point_velocity(p - data.origin);
+            let stance = leg.phase == LegPhase::Stance;
+            if stance && touching {
+                let friction = input
+                    .terrain
+                    .closest_with_material(p)
+                    .map_or(0.5, |(_, m)| m.friction)
+                    * self.params.friction_fraction;
+                let normal = input
+                    .normals
+                    .get(i)
+                    .copied()
+                    .filter(|n| n.length_squared() > 0.5)
+                    .unwrap_or(DVec3::Z);
+                contacts[nc] = ContactTask {
+                    body: li.body,
+                    point_m: p,
+                    normal,
+                    friction,
+                    load: leg.load,
+                    force_plan_n: self.forces[i],
+                };
+                contact_leg[nc] = i;
+                nc += 1;
+            } else {
+                let acc = if stance {
+                    // planned support off the ground: back down where it last stood
+                    let z = if self.last_contact_z[i].is_finite() {
+                        self.last_contact_z[i]
+                    } else {
+                        p.z
+                    };
+                    let target = DVec3::new(p.x, p.y, z - 0.02);
+                    kp * (target - p) - kd * vel
+                } else {
+                    let r = leg.swing_reference(self.params.lift_height_m, &self.params.reach);
+                    let a = r.acc_m_s2 + kp * (r.pos_m - p) + kd * (r.vel_m_s - vel);
+                    let amax = self.params.swing_max_acc_mps2;
+                    if amax > 0.0 && a.length() > amax {
+                        a * (amax / a.length())
+                    } else {
+                        a
+                    }
+                };
+                points[np] = PointTask {
+                    body: li.body,
+                    point_m: p,
+                    acc_mps2: acc,
+                };
+                np += 1;
+            }
+            if li.dof == 4 {
+                let j = li.vi[3] - nv0;
+                let level = if stance {
+                    match lanes_second {
+                        Some(a) if second[i].is_finite() => a[i][3],
+                        Some(_) => 0.0,
+                        None => match self.legs[i].ik_clamped_ankle(second[i], &self.params.ik) {
+                            Some(Ok(a)) => a,
+                            _ => 0.0,
+                        },
+                    }
+                } else {
+                    self.q_des[j]
+                };
+                joints[nj] = JointTask {
+                    v_index: li.vi[3],
+                    acc_radps2: pkp * (level - q[li.qi[3]]) - pkd * v[li.vi[3]],
+                };
+                nj += 1;
+            }
+        }
+        let body = BodyTask {
+            force_n: self.wrench.lin,
+            torque_nm: self.wrench.ang,
+        };
+        let wbc = self.wbc.as_mut().expect("whole-body workspace");
+        match wbc.solve(
+            model,
+            data,
+            v,
+            &contacts[..nc],
+            &body,
+            &points[..np],
+            &joints[..nj],
+            tau_joints,
+        ) {
+            Ok(out) => {
+                if std::env::var("WBDEBUG").is_ok() {
+                    eprintln!(
+                        "nc {nc} np {np} qp {} db {:?} f {:?} tau {:?}",
+                        out.qp_solved,
+                        out.base_change.map(|x| (x * 10.0).round() / 10.0),
+                        out.forces_n[..nc]
+                            .iter()
+                            .map(|f| f.round())
+                            .collect::<Vec<_>>(),
+                        tau_joints.iter().map(|x| x.round()).collect::<Vec<_>>()
+                    );
+                }
+                self.forces = [DVec3::ZERO; MAX_FEET];
+                for k in 0..nc {
+                    self.forces[contact_leg[k]] = out.forces_n[k];
+                }
+            }
+            Err(_) => tau_joints.fill(0.0),
+        }
+        for (t, lim) in tau_joints.iter_mut().zip(&model.effort_limit[nv0..]) {
+            *t = t.clamp(-lim, *lim);
+        }
+    }
+
     /// Changes the payload mass that gravity compensation carries (kg; a
     /// payload attached or detached and known to the controller).
     pub fn add_payload_mass_kg(&mut self, delta_kg: f64) {

@@ -1,0 +1,686 @@
+//! Whole-body control: task-space inverse dynamics with the full `M(q)` and
+//! `h(q, v)`, in the form of whole-body impulse control (Kim et al. 2019,
+//! "Highly dynamic quadruped locomotion via whole-body impulse control and
+//! model predictive control", §III).
+//!
+//! Why: quad16's legs are 18 of its 28 kg. A lumped-mass planner's ground
+//! forces mapped by `τ = −Jᵀ f` ignore them, so the forces the ground really
+//! gives differ from the plan and the swing legs' reactions move the torso.
+//! Here the torques come from the equations of motion of the whole tree.
+//!
+//! # The two passes
+//! 1. **Kinematic task hierarchy** (accelerations). With `J̄ = M⁻¹ Jᵀ (J M⁻¹
+//!    Jᵀ)⁻¹` the dynamically consistent inverse:
+//!    - stance feet do not accelerate: `J_c q̈ = −J̇_c v`;
+//!    - then, each in the null space of those before it: torso attitude, torso
+//!      position, swing feet, joint postures.
+//!
+//!    Each task `i` adds `J̄ᵢ|pre (ẍᵢ − J̇ᵢ v − Jᵢ q̈)` and shrinks the null
+//!    space: `N ← N (I − J̄ᵢ|pre Jᵢ N)`.
+//! 2. **A small QP** over the change `δf` of the planned stance forces and
+//!    `δ_b` of the base's acceleration, subject to the floating base's six
+//!    equations of motion `M_b (q̈ + [δ_b; 0]) + h_b = J_cbᵀ (f_plan + δf)` and
+//!    the friction pyramids and normal-force bounds:
+//!    `min w_f ‖δf‖² + ‖δ_b‖²_{W_b}`. The equality is eliminated
+//!    (`δ_b = M_bb⁻¹ (r + J_cbᵀ δf)`), leaving ≤ 12 variables and ≤ 24
+//!    constraints for the stack solver of [`super::active_set`].
+//!
+//! Then `τ = (M q̈ + h − J_cᵀ f)` on the joint rows (`f`: the ground's force on
+//! the foot, world axes; `M q̈ + h = τ + J_cᵀ f`).
+//!
+//! Units: accelerations in m/s² and rad/s², forces in N, world axes unless
+//! stated; the base's velocity coordinates are the engine's (body frame).
+
+use crate::control::active_set::{ActiveSet, DenseQp, MAX_VARS};
+use crate::control::force_qp::{MAX_FEET, tangent_basis};
+use crate::data::Data;
+use crate::jacobian::point_jacobian;
+use crate::linalg::{cholesky_dense, cholesky_dense_solve};
+use crate::model::Model;
+use glam::{DMat3, DVec3};
+
+/// Weights and damping of the whole-body layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WbcParams {
+    /// Weight of a change of the planned stance forces (per N²).
+    pub force_weight: f64,
+    /// Weight of a change of the base's horizontal acceleration (per (m/s²)²,
+    /// the base frame's x and y).
+    pub base_linear_weight: f64,
+    /// Weight of a change of the base's vertical acceleration (per (m/s²)²,
+    /// the base frame's z): the torso's height, which the heavy legs' swing
+    /// would otherwise move.
+    pub base_vertical_weight: f64,
+    /// Weight of a change of the base's angular acceleration (per (rad/s²)²).
+    pub base_angular_weight: f64,
+    /// Damping `λ` of the task inverses `(J M⁻¹ Jᵀ + λ I)⁻¹` (units of
+    /// inverse mass): keeps singular legs (a stretched knee) finite.
+    pub damping: f64,
+    /// Rate (1/s) at which a stance foot's velocity is driven to zero: the
+    /// contact rows ask `J_c q̈ = −J̇_c v − k J_c v`, so that a foot that has
+    /// started to slide stops instead of keeping its speed.
+    pub contact_velocity_gain: f64,
+    /// Smallest and largest normal force of a fully loaded stance foot (N);
+    /// both scale with the foot's load factor.
+    pub normal_force_n: (f64, f64),
+}
+
+impl Default for WbcParams {
+    /// Forces follow the plan loosely (1 N of change costs like 0.1 m/s² of
+    /// the base); the torso's attitude outweighs its position.
+    fn default() -> Self {
+        WbcParams {
+            force_weight: 1.0,
+            base_linear_weight: 1e-3,
+            base_vertical_weight: 1e-3,
+            base_angular_weight: 10.0,
+            damping: 1e-6,
+            contact_velocity_gain: 30.0,
+            normal_force_n: (2.0, 1000.0),
+        }
+    }
+}
+
+/// A stance foot: a point that must not accelerate, with the force planned
+/// for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactTask {
+    /// The body the foot point is fixed on.
+    pub body: usize,
+    /// The contact point (m, world).
+    pub point_m: DVec3,
+    /// The ground's normal there (unit, world).
+    pub normal: DVec3,
+    /// Friction coefficient the forces may use (already reduced by any margin).
+    pub friction: f64,
+    /// Load factor in [0, 1] from the gait (scales the normal-force bounds).
+    pub load: f64,
+    /// The planned ground force on the foot (N, world).
+    pub force_plan_n: DVec3,
+}
+
+/// A point on a body that tracks a reference (a swing foot).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointTask {
+    /// The body the point is fixed on.
+    pub body: usize,
+    /// The point now (m, world).
+    pub point_m: DVec3,
+    /// The commanded acceleration (m/s², world): the reference's feed-forward
+    /// plus the caller's feedback on position and velocity.
+    pub acc_mps2: DVec3,
+}
+
+/// A joint posture: a commanded joint acceleration (rad/s²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointTask {
+    /// The joint's velocity index in `v`.
+    pub v_index: usize,
+    /// The commanded acceleration (rad/s²).
+    pub acc_radps2: f64,
+}
+
+/// The torso's task: a virtual wrench about the whole robot's CoM (world
+/// axes, gravity compensation included), turned into the accelerations a
+/// rigid body of the robot's mass and centroidal inertia (now) would take.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyTask {
+    /// Force (N).
+    pub force_n: DVec3,
+    /// Moment about the CoM (N·m).
+    pub torque_nm: DVec3,
+}
+
+/// What one solve produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WbcOutput {
+    /// The ground forces the torques are computed with (N, world), per contact
+    /// in the order given.
+    pub forces_n: [DVec3; MAX_FEET],
+    /// The base's acceleration change the QP chose (body frame: linear, angular).
+    pub base_change: [f64; 6],
+    /// Whether the QP was solved (otherwise the plan was used unchanged; in
+    /// flight there is none).
+    pub qp_solved: bool,
+}
+
+/// Why a solve failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum WbcError {
+    /// `M(q)` was not positive definite (a non-finite state).
+    #[error("whole-body control: the mass matrix is not positive definite")]
+    MassMatrix,
+    /// More contacts than [`MAX_FEET`].
+    #[error("whole-body control: more than {MAX_FEET} contacts")]
+    TooManyContacts,
+}
+
+/// The whole-body layer's workspace: every buffer a solve needs, sized for the
+/// model once (the solve allocates nothing).
+#[derive(Clone, Debug)]
+pub struct WholeBody {
+    /// Parameters.
+    pub params: WbcParams,
+    nv: usize,
+    zeros: Vec<f64>,
+    h: Vec<f64>,
+    m: Vec<f64>,
+    l: Vec<f64>,
+    minv: Vec<f64>,
+    null: Vec<f64>,
+    qdd: Vec<f64>,
+    /// Task rows (≤ 12 × nv), their bias and target.
+    jt: Vec<f64>,
+    jn: Vec<f64>,
+    target: Vec<f64>,
+    /// Contact Jacobian (3 nc × nv).
+    jc: Vec<f64>,
+    /// Swing points' Jacobian (3 np × nv).
+    jp: Vec<f64>,
+    /// `Z` (nv × 6): how q̈ changes with the base's acceleration change `δ_b`
+    /// when every foot keeps its task (`J Z = 0` on each leg).
+    z: Vec<f64>,
+    // scratch
+    a: Vec<f64>,
+    b: Vec<f64>,
+    c: Vec<f64>,
+    lam: Vec<f64>,
+    col: Vec<f64>,
+    qp: Box<DenseQp>,
+    solver: Box<ActiveSet>,
+}
+
+/// Most rows of one task (four feet × 3).
+const MAX_ROWS: usize = 3 * MAX_FEET;
+
+impl WholeBody {
+    /// A workspace for `model`.
+    pub fn new(model: &Model, params: WbcParams) -> WholeBody {
+        let nv = model.nv;
+        WholeBody {
+            params,
+            nv,
+            zeros: vec![0.0; nv],
+            h: vec![0.0; nv],
+            m: vec![0.0; nv * nv],
+            l: vec![0.0; nv * nv],
+            minv: vec![0.0; nv * nv],
+            null: vec![0.0; nv * nv],
+            qdd: vec![0.0; nv],
+            jt: vec![0.0; MAX_ROWS * nv],
+            jn: vec![0.0; MAX_ROWS * nv],
+            target: vec![0.0; MAX_ROWS],
+            jc: vec![0.0; MAX_ROWS * nv],
+            jp: vec![0.0; MAX_ROWS * nv],
+            z: vec![0.0; nv * 6],
+            a: vec![0.0; MAX_ROWS * nv],
+            b: vec![0.0; nv * MAX_ROWS],
+            c: vec![0.0; nv * nv],
+            lam: vec![0.0; MAX_ROWS * MAX_ROWS],
+            col: vec![0.0; nv.max(MAX_ROWS)],
+            qp: Box::default(),
+            solver: Box::new(ActiveSet::default()),
+        }
+    }
+
+    /// The generalized accelerations of the last solve (nv).
+    pub fn accelerations(&self) -> &[f64] {
+        &self.qdd
+    }
+
+    /// Joint torques (`tau_joints`, nv − 6) that realise the tasks, for the
+    /// state `(q, v)` whose kinematics `data` holds
+    /// ([`crate::kinematics::forward_kinematics`]). Torques are not clamped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        v: &[f64],
+        contacts: &[ContactTask],
+        body: &BodyTask,
+        points: &[PointTask],
+        joints: &[JointTask],
+        tau_joints: &mut [f64],
+    ) -> Result<WbcOutput, WbcError> {
+        let nv = self.nv;
+        let nb = model.base_nv();
+        let nc = contacts.len();
+        if nc > MAX_FEET {
+            return Err(WbcError::TooManyContacts);
+        }
+        // h(q, v) and the bodies' bias accelerations (q̈ = 0): one RNEA pass.
+        crate::rnea::rnea_from_kinematics(model, data, v, &self.zeros, false);
+        self.h.copy_from_slice(&data.tau);
+        // M(q), its factor and inverse
+        {
+            let mm = crate::crba::crba_from_kinematics(model, data);
+            self.m.copy_from_slice(&mm);
+        }
+        self.l.copy_from_slice(&self.m);
+        if !cholesky_dense(&mut self.l, nv) {
+            return Err(WbcError::MassMatrix);
+        }
+        for i in 0..nv {
+            self.col.fill(0.0);
+            self.col[i] = 1.0;
+            cholesky_dense_solve(&self.l, nv, &mut self.col[..nv]);
+            for r in 0..nv {
+                self.minv[r * nv + i] = self.col[r];
+            }
+        }
+        self.qdd.fill(0.0);
+        self.null.fill(0.0);
+        for i in 0..nv {
+            self.null[i * nv + i] = 1.0;
+        }
+
+        // 1. contacts: J_c q̈ = −J̇_c v − k J_c v
+        let kc = self.params.contact_velocity_gain;
+        for (k, c) in contacts.iter().enumerate() {
+            let bias = point_bias(model, data, c.body, c.point_m);
+            let vel = data.vel[c.body].point_velocity(c.point_m - data.origin);
+            let j = point_jacobian(model, data, c.body, c.point_m);
+            self.jt[3 * k * nv..3 * (k + 1) * nv].copy_from_slice(j);
+            for r in 0..3 {
+                self.target[3 * k + r] = -bias[r] - kc * vel[r];
+            }
+        }
+        self.jc[..3 * nc * nv].copy_from_slice(&self.jt[..3 * nc * nv]);
+        self.task(3 * nc, false);
+
+        // 2. the torso: attitude (ω̇ world = R ω̇_b, no bias) and the base
+        //    origin's acceleration, one task of six rows
+        if nb == 6 {
+            let rot = data.pose[0].rot;
+            let (lin, ang) = self.body_accelerations(model, data, rot, body);
+            let p0 = data.pose[0].trans;
+            let bias = point_bias(model, data, 0, p0);
+            let j = point_jacobian(model, data, 0, p0);
+            self.jt[3 * nv..6 * nv].copy_from_slice(j);
+            self.jt[..3 * nv].fill(0.0);
+            for r in 0..3 {
+                for k in 0..3 {
+                    self.jt[r * nv + 3 + k] = rot.col(k)[r];
+                }
+                self.target[r] = ang[r];
+                self.target[3 + r] = lin[r] - bias[r];
+            }
+            let last = points.is_empty() && joints.is_empty();
+            self.task(6, last);
+        }
+        // 3. swing feet, one task
+        if points.len() > MAX_FEET {
+            return Err(WbcError::TooManyContacts);
+        }
+        for (k, p) in points.iter().enumerate() {
+            let bias = point_bias(model, data, p.body, p.point_m);
+            let j = point_jacobian(model, data, p.body, p.point_m);
+            self.jt[3 * k * nv..3 * (k + 1) * nv].copy_from_slice(j);
+            for r in 0..3 {
+                self.target[3 * k + r] = p.acc_mps2[r] - bias[r];
+            }
+        }
+        let np = points.len();
+        self.jp[..3 * np * nv].copy_from_slice(&self.jt[..3 * np * nv]);
+        self.task(3 * np, joints.is_empty());
+        // 4. joint postures, one task
+        let nj = joints.len().min(MAX_ROWS);
+        self.jt[..nj * nv].fill(0.0);
+        for (r, jtk) in joints[..nj].iter().enumerate() {
+            self.jt[r * nv + jtk.v_index] = 1.0;
+            self.target[r] = jtk.acc_radps2;
+        }
+        self.task(nj, true);
+
+        // 6. the QP over δf (δ_b eliminated through the base's rows)
+        let mut out = WbcOutput {
+            forces_n: [DVec3::ZERO; MAX_FEET],
+            base_change: [0.0; 6],
+            qp_solved: false,
+        };
+        for (k, c) in contacts.iter().enumerate() {
+            out.forces_n[k] = c.force_plan_n;
+        }
+        if nb == 6 {
+            self.base_change_map(nc, points.len());
+            self.reaction_qp(contacts, &mut out);
+            for i in 0..nv {
+                let mut s = 0.0;
+                for k in 0..6 {
+                    s += self.z[i * 6 + k] * out.base_change[k];
+                }
+                self.qdd[i] += s;
+            }
+        }
+
+        // 7. τ = M q̈ + h − J_cᵀ f (joint rows)
+        for (t, i) in tau_joints.iter_mut().zip(nb..nv) {
+            let mut s = self.h[i];
+            let row = &self.m[i * nv..(i + 1) * nv];
+            for (mij, a) in row.iter().zip(&self.qdd) {
+                s += mij * a;
+            }
+            for (k, f) in out.forces_n[..nc].iter().enumerate() {
+                let base = 3 * k * nv;
+                s -= self.jc[base + i] * f.x
+                    + self.jc[base + nv + i] * f.y
+                    + self.jc[base + 2 * nv + i] * f.z;
+            }
+            *t = s;
+        }
+        Ok(out)
+    }
+
+    /// The accelerations (linear, angular; world) the body task asks for:
+    /// the whole robot's mass `m` and rotational inertia about its CoM,
+    /// `I_com = I_o − m (|c|² I − c cᵀ)` (parallel axes), from `M_bb`'s
+    /// rotational block `I_o` (base frame, about the base origin) and the CoM
+    /// `c` in the base frame.
+    fn body_accelerations(
+        &self,
+        model: &Model,
+        data: &Data,
+        rot: DMat3,
+        body: &BodyTask,
+    ) -> (DVec3, DVec3) {
+        let nv = self.nv;
+        let mb = |i: usize, k: usize| self.m[i * nv + k];
+        let mass = model.total_mass;
+        let com = crate::com::center_of_mass(model, data);
+        let c = rot.transpose() * (com - data.pose[0].trans);
+        let io = DMat3::from_cols(
+            DVec3::new(mb(3, 3), mb(4, 3), mb(5, 3)),
+            DVec3::new(mb(3, 4), mb(4, 4), mb(5, 4)),
+            DVec3::new(mb(3, 5), mb(4, 5), mb(5, 5)),
+        );
+        let shift = (DMat3::IDENTITY * c.length_squared()
+            - DMat3::from_cols(c * c.x, c * c.y, c * c.z))
+            * mass;
+        let i_world = rot * (io - shift) * rot.transpose();
+        let lin = body.force_n / mass + model.gravity;
+        let ang = i_world.inverse() * body.torque_nm;
+        (lin, ang)
+    }
+
+    /// Adds the task in `jt[..rows·nv]` (target in `target[..rows]`, bias
+    /// already subtracted) to `qdd` in the null space of the tasks before it,
+    /// and shrinks that null space (unless it is the `last`).
+    fn task(&mut self, rows: usize, last: bool) {
+        if rows == 0 {
+            return;
+        }
+        let nv = self.nv;
+        // JN = J N
+        for r in 0..rows {
+            for c in 0..nv {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.jt[r * nv + k] * self.null[k * nv + c];
+                }
+                self.jn[r * nv + c] = s;
+            }
+        }
+        // B = M⁻¹ (JN)ᵀ (nv × rows)
+        for i in 0..nv {
+            for r in 0..rows {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.minv[i * nv + k] * self.jn[r * nv + k];
+                }
+                self.b[i * rows + r] = s;
+            }
+        }
+        // Λ⁻¹ = JN B + λ I (rows × rows), factored
+        for r in 0..rows {
+            for c in 0..rows {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.jn[r * nv + k] * self.b[k * rows + c];
+                }
+                self.lam[r * rows + c] = s + if r == c { self.params.damping } else { 0.0 };
+            }
+        }
+        if !cholesky_dense(&mut self.lam[..rows * rows], rows) {
+            return; // the task has no room left in the null space
+        }
+        // e = target − J q̈
+        for r in 0..rows {
+            let mut s = self.target[r];
+            for k in 0..nv {
+                s -= self.jt[r * nv + k] * self.qdd[k];
+            }
+            self.col[r] = s;
+        }
+        cholesky_dense_solve(&self.lam[..rows * rows], rows, &mut self.col[..rows]);
+        // q̈ += B Λ e
+        for i in 0..nv {
+            let mut s = 0.0;
+            for r in 0..rows {
+                s += self.b[i * rows + r] * self.col[r];
+            }
+            self.qdd[i] += s;
+        }
+        if last {
+            return;
+        }
+        // J̄ = B Λ (nv × rows): solve Λ⁻¹ X = Bᵀ column by column
+        for i in 0..nv {
+            for r in 0..rows {
+                self.col[r] = self.b[i * rows + r];
+            }
+            cholesky_dense_solve(&self.lam[..rows * rows], rows, &mut self.col[..rows]);
+            for r in 0..rows {
+                self.a[i * rows + r] = self.col[r];
+            }
+        }
+        // N ← N (I − J̄ JN) = N − (N J̄) JN
+        for i in 0..nv {
+            // row i of N J̄ (rows entries) into col
+            for r in 0..rows {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.null[i * nv + k] * self.a[k * rows + r];
+                }
+                self.col[r] = s;
+            }
+            for c in 0..nv {
+                let mut s = 0.0;
+                for r in 0..rows {
+                    s += self.col[r] * self.jn[r * nv + c];
+                }
+                self.c[i * nv + c] = self.null[i * nv + c] - s;
+            }
+        }
+        std::mem::swap(&mut self.null, &mut self.c);
+    }
+
+    /// Fills `Z` (nv × 6): the base's rows the identity, each foot's leg
+    /// `−J_j⁺ J_b` (its joint columns `J_j`, the base's `J_b`, damped
+    /// least-squares inverse), so that changing the base's acceleration by
+    /// `δ_b` and the legs' by `Z δ_b` leaves every foot's acceleration as its
+    /// task set it (stance feet stay still). Other joints do not change.
+    fn base_change_map(&mut self, nc: usize, np: usize) {
+        let nv = self.nv;
+        self.z.fill(0.0);
+        for k in 0..6 {
+            self.z[k * 6 + k] = 1.0;
+        }
+        for foot in 0..nc + np {
+            let rows = if foot < nc {
+                &self.jc[3 * foot * nv..3 * (foot + 1) * nv]
+            } else {
+                let f = foot - nc;
+                &self.jp[3 * f * nv..3 * (f + 1) * nv]
+            };
+            // the leg's joint columns (the chain's, past the base)
+            let mut cols = [0usize; 8];
+            let mut nj = 0;
+            for c in 6..nv {
+                if nj < cols.len()
+                    && (rows[c] != 0.0 || rows[nv + c] != 0.0 || rows[2 * nv + c] != 0.0)
+                {
+                    cols[nj] = c;
+                    nj += 1;
+                }
+            }
+            // G = J_j J_jᵀ + λ I (3 × 3)
+            let mut g = DMat3::ZERO;
+            for a in 0..3 {
+                for b in 0..3 {
+                    let mut s = 0.0;
+                    for &c in &cols[..nj] {
+                        s += rows[a * nv + c] * rows[b * nv + c];
+                    }
+                    g.col_mut(b)[a] = s + if a == b { 1e-9 } else { 0.0 };
+                }
+            }
+            let gi = g.inverse();
+            if !gi.is_finite() {
+                continue;
+            }
+            // Z_j = −J_jᵀ G⁻¹ J_b
+            for k in 0..6 {
+                let jb = DVec3::new(rows[k], rows[nv + k], rows[2 * nv + k]);
+                let y = gi * jb;
+                for &c in &cols[..nj] {
+                    let jj = DVec3::new(rows[c], rows[nv + c], rows[2 * nv + c]);
+                    self.z[c * 6 + k] = -jj.dot(y);
+                }
+            }
+        }
+    }
+
+    /// The reaction-force QP (module docs, pass 2); fills `out.forces_n` and
+    /// `out.base_change`, or leaves the plan when the QP fails.
+    fn reaction_qp(&mut self, contacts: &[ContactTask], out: &mut WbcOutput) {
+        let nv = self.nv;
+        let nc = contacts.len();
+        let n = 3 * nc;
+        // r = J_cbᵀ f_plan − h_b − (M q̈)_b
+        let mut r = [0.0; 6];
+        for (i, ri) in r.iter_mut().enumerate() {
+            let mut s = -self.h[i];
+            for k in 0..nv {
+                s -= self.m[i * nv + k] * self.qdd[k];
+            }
+            for (c, ct) in contacts.iter().enumerate() {
+                let f = ct.force_plan_n;
+                let base = 3 * c * nv;
+                s += self.jc[base + i] * f.x
+                    + self.jc[base + nv + i] * f.y
+                    + self.jc[base + 2 * nv + i] * f.z;
+            }
+            *ri = s;
+        }
+        // M_b Z (6 × 6), factored by LU
+        let mut mbz = nalgebra::Matrix6::<f64>::zeros();
+        for i in 0..6 {
+            for k in 0..6 {
+                let mut s = 0.0;
+                for c in 0..nv {
+                    s += self.m[i * nv + c] * self.z[c * 6 + k];
+                }
+                mbz[(i, k)] = s;
+            }
+        }
+        let lu = mbz.lu();
+        // d0 = (M_b Z)⁻¹ r; A = (M_b Z)⁻¹ J_cbᵀ (6 × n)
+        let Some(d0v) = lu.solve(&nalgebra::Vector6::from_column_slice(&r)) else {
+            return;
+        };
+        let d0: [f64; 6] = d0v.into();
+        if n == 0 {
+            // in flight the base's rows decide its acceleration alone
+            out.base_change = d0;
+            return;
+        }
+        let mut amat = [[0.0; MAX_VARS]; 6];
+        for x in 0..n {
+            let (c, axis) = (x / 3, x % 3);
+            let mut colv = nalgebra::Vector6::<f64>::zeros();
+            for i in 0..6 {
+                colv[i] = self.jc[(3 * c + axis) * nv + i];
+            }
+            let Some(sol) = lu.solve(&colv) else {
+                return;
+            };
+            for i in 0..6 {
+                amat[i][x] = sol[i];
+            }
+        }
+        let p = &self.params;
+        let w = [
+            p.base_linear_weight,
+            p.base_linear_weight,
+            p.base_vertical_weight,
+            p.base_angular_weight,
+            p.base_angular_weight,
+            p.base_angular_weight,
+        ];
+        let qp = &mut *self.qp;
+        qp.n = n;
+        qp.m = 6 * nc;
+        qp.foot_blocks = true;
+        for x in 0..n {
+            let mut g = 0.0;
+            for i in 0..6 {
+                g += amat[i][x] * w[i] * d0[i];
+            }
+            qp.g[x] = g;
+            for y in 0..n {
+                let mut s = if x == y { p.force_weight } else { 0.0 };
+                for i in 0..6 {
+                    s += amat[i][x] * w[i] * amat[i][y];
+                }
+                qp.h[x][y] = s;
+            }
+        }
+        let (fmin, fmax) = p.normal_force_n;
+        for (c, ct) in contacts.iter().enumerate() {
+            let nrm = ct.normal;
+            let (t1, t2) = tangent_basis(nrm);
+            let mu = ct.friction * std::f64::consts::FRAC_1_SQRT_2;
+            let rows: [(DVec3, f64); 6] = [
+                (nrm, fmin * ct.load),
+                (-nrm, -fmax * ct.load),
+                (mu * nrm - t1, 0.0),
+                (mu * nrm + t1, 0.0),
+                (mu * nrm - t2, 0.0),
+                (mu * nrm + t2, 0.0),
+            ];
+            for (j, (cv, b)) in rows.into_iter().enumerate() {
+                let row = &mut qp.c[6 * c + j];
+                *row = [0.0; MAX_VARS];
+                row[3 * c..3 * c + 3].copy_from_slice(&cv.to_array());
+                // cᵀ(f_plan + δf) ≥ b
+                qp.b[6 * c + j] = b - cv.dot(ct.force_plan_n);
+            }
+        }
+        let Ok(x) = self.solver.solve(qp) else {
+            return;
+        };
+        for (c, ct) in contacts.iter().enumerate() {
+            out.forces_n[c] = ct.force_plan_n + DVec3::new(x[3 * c], x[3 * c + 1], x[3 * c + 2]);
+        }
+        for i in 0..6 {
+            let mut s = d0[i];
+            for y in 0..n {
+                s += amat[i][y] * x[y];
+            }
+            out.base_change[i] = s;
+        }
+        out.qp_solved = true;
+    }
+}
+
+/// The classical acceleration (m/s², world) of the point `point_m` fixed on
+/// `body` when `q̈ = 0`: `J̇ v`. Reads the bodies' spatial accelerations of an
+/// RNEA pass run with zero acceleration (which start from gravity's
+/// fictitious upward acceleration, removed here).
+fn point_bias(model: &Model, data: &Data, body: usize, point_m: DVec3) -> DVec3 {
+    let r = point_m - data.origin;
+    let acc = data.acc[body];
+    let vel = data.vel[body];
+    acc.point_velocity(r) + vel.ang.cross(vel.point_velocity(r)) + model.gravity
+}
