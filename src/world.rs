@@ -747,6 +747,16 @@ fn controller(
         "vmc" => {
             let mut wp = WalkerParams::default_for(desc, model);
             let has = |k: &str| c.params.contains_key(k);
+            // the whole-body layer, with its trot, unless the scenario asks
+            // for Study A's τ = Jᵀ f mapping
+            wp.whole_body = c
+                .params
+                .get("whole_body")
+                .and_then(|v| v.as_bool())
+                .unwrap_or(true);
+            if wp.whole_body {
+                wp.gait = Gait::long_swing_trot();
+            }
             let kp = format!("{p}.controller");
             if let Some(name) = c.params.get("gait").and_then(|v| v.as_str()) {
                 let kind = GaitKind::from_name(name).ok_or_else(|| {

@@ -568,6 +568,7 @@ model = "quad16"
 [robots.controller]
 kind = "vmc"
 period_s = 0.5
+whole_body = false
 four_leg_support_s = 0.1
 two_leg_support_s = 0.15
 v_x_mps = 0.5

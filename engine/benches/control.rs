@@ -10,7 +10,11 @@
 //! Each case is solved by the dedicated active-set solver (`active_set`) and
 //! by clarabel (`clarabel`, the reference), plus one VMC update (`vmc`). The
 //! controller runs at 500 Hz against a 2 kHz physics step, so its cost per
-//! robot-step is the solve cost / 4; target ≤ 1 µs amortised. Run with
+//! robot-step is the solve cost / 4; target ≤ 1 µs amortised.
+//!
+//! `wbc/trot_pair`: one solve of the whole-body layer (`control::wbc`) on
+//! quad16 in diagonal support (two contacts, two swing feet, four ankle
+//! postures), kinematics already computed. Run with
 //! `cargo bench -p quadsim-engine --bench control`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -94,6 +98,78 @@ fn bench(c: &mut Criterion) {
         dt_s: 0.002,
     };
     c.bench_function("vmc/update", |b| b.iter(|| vmc.update(black_box(&input))));
+    bench_wbc(c);
+}
+
+fn bench_wbc(c: &mut Criterion) {
+    use quadsim_engine::control::wbc::{
+        BodyTask, ContactTask, JointTask, PointTask, WbcParams, WholeBody,
+    };
+    use quadsim_engine::kinematics::{forward_kinematics, frame_pose};
+    use quadsim_engine::legs::{FootPoint, LegKinematics};
+    use quadsim_engine::model::{BaseKind, Model};
+    use quadsim_engine::{Data, robots};
+    let desc = robots::builtin("quad16").unwrap();
+    let model = Model::from_description(&desc, BaseKind::Floating).unwrap();
+    let legs = LegKinematics::for_robot(&desc, &model, FootPoint::Contact).unwrap();
+    let mut data = Data::new(&model);
+    let mut q = vec![0.0, 0.0, 0.55, 0.0, 0.0, 0.0, 1.0];
+    q.extend_from_slice(&robots::nominal_stance("quad16").unwrap());
+    let v: Vec<f64> = (0..model.nv)
+        .map(|i| 0.1 * ((i as f64) * 0.7).sin())
+        .collect();
+    forward_kinematics(&model, &mut data, &q, &v);
+    let mut contacts = Vec::new();
+    let mut points = Vec::new();
+    let mut joints = Vec::new();
+    for (i, leg) in legs.iter().enumerate() {
+        let frame = leg.foot_frame();
+        let local = FootPoint::Contact.in_foot(&desc, &model.frames[frame].name);
+        let p = frame_pose(&model, &data, frame).transform_point(local);
+        let body = model.frames[frame].body;
+        if i % 2 == 0 {
+            contacts.push(ContactTask {
+                body,
+                point_m: p,
+                normal: DVec3::Z,
+                friction: 0.8,
+                load: 1.0,
+                force_plan_n: DVec3::new(10.0, 0.0, 137.0),
+            });
+        } else {
+            points.push(PointTask {
+                body,
+                point_m: p,
+                acc_mps2: DVec3::new(20.0, 0.0, 5.0),
+            });
+        }
+        joints.push(JointTask {
+            v_index: leg.v_indices()[3],
+            acc_radps2: 1.0,
+        });
+    }
+    let body = BodyTask {
+        force_n: DVec3::new(30.0, 0.0, 280.0),
+        torque_nm: DVec3::new(0.0, 2.0, 0.0),
+    };
+    let mut wbc = WholeBody::new(&model, WbcParams::default());
+    let mut tau = vec![0.0; model.nv - 6];
+    c.bench_function("wbc/trot_pair", |b| {
+        b.iter(|| {
+            wbc.solve(
+                &model,
+                &mut data,
+                black_box(&v),
+                &contacts,
+                &body,
+                &points,
+                &joints,
+                &mut tau,
+            )
+            .unwrap();
+            black_box(&tau);
+        })
+    });
 }
 
 criterion_group!(benches, bench);

@@ -269,6 +269,8 @@ fn main() {
     let mut x_prev = st.q[0];
     let mut tau_peak = vec![0.0_f64; model.nv - 6];
     let mut sat = 0usize;
+    // peak normal foot force after the first second (N) and when (s)
+    let mut fpk = (0.0f64, 0.0f64, 0usize);
     let mut slip = 0usize;
     let mut nflight = 0usize;
     let (mut touchdowns, mut early_td, mut unloaded_stance) = (0usize, 0usize, 0usize);
@@ -371,6 +373,12 @@ fn main() {
             Integrator::SemiImplicitEuler,
             &mut f,
         );
+        let t_now = (k + 1) as f64 * dt;
+        for (i, s) in states.iter().enumerate() {
+            if t_now > 1.0 && s.normal_force_n > fpk.0 {
+                fpk = (s.normal_force_n, t_now, i);
+            }
+        }
         for (i, s) in states.iter().enumerate() {
             if s.in_contact && s.slipping {
                 let l = walker.scheduler().leg(i);
@@ -454,6 +462,10 @@ fn main() {
         "RESULT v {vx} fell {:?} mean[3,{dur}] {mean:.3} tilt {max_tilt:.3} p2p {:.4} sat_ticks {sat} loaded_slip_steps {slip} flight_ticks {nflight} touchdowns {touchdowns} early(<0.95) {early_td} loaded_stance_ticks_without_contact {unloaded_stance}",
         fell,
         zmax - zmin
+    );
+    println!(
+        "peak foot force after 1 s: {:.0} N at {:.3} s (foot {})",
+        fpk.0, fpk.1, fpk.2
     );
     if swing_diag {
         for (b, (a, n)) in sw_acc.iter().zip(&sw_n).enumerate() {

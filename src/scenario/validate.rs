@@ -26,6 +26,8 @@ pub enum Domain {
     Tables,
     /// A number ≥ 0, or an array of them (one per joint; the length is checked when the model is known).
     Gains,
+    /// `true` or `false`.
+    Bool,
 }
 
 /// A key accepted by a `kind`: name, domain, required.
@@ -124,6 +126,7 @@ pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
             ("swing_bandwidth_hz", Domain::Positive, false),
             ("placement_gain_s", Domain::NonNegative, false),
             ("position_clip_m", Domain::Positive, false),
+            ("whole_body", Domain::Bool, false),
         ],
     ),
     (
@@ -509,6 +512,10 @@ fn check_domain(
         Domain::Text => match v {
             toml::Value::String(_) => Ok(()),
             _ => bad("must be a string"),
+        },
+        Domain::Bool => match v {
+            toml::Value::Boolean(_) => Ok(()),
+            _ => bad("must be true or false"),
         },
         Domain::Tables => match v {
             toml::Value::Array(a) if a.iter().all(|x| x.is_table()) => Ok(()),

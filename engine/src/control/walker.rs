@@ -977,7 +977,17 @@ impl Walker {
         };
 
         if self.wbc.is_some() {
-            self.whole_body_torques(model, data, q, v, input, &lanes_second, &second, tau_joints);
+            self.whole_body_torques(
+                model,
+                data,
+                q,
+                v,
+                input,
+                &planned_base,
+                &lanes_second,
+                &second,
+                tau_joints,
+            );
             return;
         }
 
@@ -1049,6 +1059,7 @@ impl Walker {
         q: &[f64],
         v: &[f64],
         input: &WalkerInput<'_>,
+        planned_base: &crate::spatial::Transform,
         lanes_second: &Option<[[f64; 4]; 4]>,
         second: &[DVec3; MAX_FEET],
         tau_joints: &mut [f64],
@@ -1119,8 +1130,22 @@ impl Walker {
                     let target = DVec3::new(p.x, p.y, z - 0.02);
                     kp * (target - p) - kd * vel
                 } else {
+                    // The reference relative to the planned base (level, at
+                    // the target height), tracked relative to the measured
+                    // torso, as the Jᵀ path's IK does: the foot's place
+                    // under the torso comes from the encoders, so errors of
+                    // the estimated base pose do not move it.
                     let r = leg.swing_reference(self.params.lift_height_m, &self.params.reach);
-                    let a = r.acc_m_s2 + kp * (r.pos_m - p) + kd * (r.vel_m_s - vel);
+                    let base = data.pose[0];
+                    let vb = data.vel[0].point_velocity(base.trans - data.origin);
+                    let wb = data.vel[0].ang;
+                    let rpl = planned_base.rot;
+                    let target_rel = base.rot * (rpl.transpose() * (r.pos_m - planned_base.trans));
+                    let v_pl = DVec3::new(vb.x, vb.y, 0.0);
+                    let vel_target_rel = base.rot * (rpl.transpose() * (r.vel_m_s - v_pl));
+                    let rel = p - base.trans;
+                    let vel_rel = vel - vb - wb.cross(rel);
+                    let a = r.acc_m_s2 + kp * (target_rel - rel) + kd * (vel_target_rel - vel_rel);
                     let amax = self.params.swing_max_acc_mps2;
                     if amax > 0.0 && a.length() > amax {
                         a * (amax / a.length())
