@@ -19,6 +19,8 @@
 //! and a merge of all shards give the same rows as one whole run.
 
 pub mod analysis;
+pub mod campaign;
+pub mod campaign_output;
 pub mod optimize;
 pub mod output;
 pub mod sample;
