@@ -315,11 +315,11 @@ fn draw<DB: DrawingBackend>(
         .iter()
         .map(|c| (c, binned_speed(c.trace.iter().map(|p| (p.0, p.1)))))
         .collect();
-    // the command as ramped, from the first copy that ran
+    // the command as ramped, from the copy that ran longest
     let command: Vec<(f64, f64)> = if r.command.is_some() {
         r.runs
             .iter()
-            .find(|c| !c.trace.is_empty())
+            .max_by_key(|c| c.trace.len())
             .map(|c| binned_speed(c.trace.iter().map(|p| (p.0, p.2))))
             .unwrap_or_default()
     } else {
@@ -399,9 +399,10 @@ fn draw<DB: DrawingBackend>(
                         PathElement::new(vec![(x, y), (x + 16, y)], col.stroke_width(2))
                     });
             }
-            if let Some(&last) = pts.last().filter(|_| fell) {
+            let at = c.metrics.as_ref().and_then(|m| m.fell_at_s);
+            if let (Some(&(_, v)), Some(t)) = (pts.last(), at) {
                 chart
-                    .draw_series(std::iter::once(Cross::new(last, 5, FELL.stroke_width(2))))
+                    .draw_series(std::iter::once(Cross::new((t, v), 5, FELL.stroke_width(2))))
                     .map_err(e)?;
             }
         }
