@@ -218,13 +218,32 @@ fn the_masses_change_the_body_not_the_controller() {
         link_mass_frac: 0.1,
         ..Perturbations::NONE
     };
+    // the built copy: the body has the drawn masses, the controller's
+    // view (and the estimator's) the nominal ones
+    let prep = Prepared::new(spec.clone()).unwrap();
+    let d = prep.draws(1);
+    let (world, root) = prep.build_copy(&d).unwrap();
+    let sim = world.sim.robot(root).unwrap();
+    let view = sim
+        .control
+        .as_ref()
+        .expect("a nominal view for the controller");
+    assert_eq!(view.model.total_mass, prep.nominal_mass_kg);
+    assert!((sim.model.total_mass - prep.nominal_mass_kg).abs() > 1e-6);
+    let torso = sim.model.frames[sim.model.frame_index("torso").unwrap()].body;
+    let s = d.link_mass_scale["torso"];
+    let (m, m0) = (
+        sim.model.inertia[torso].mass,
+        view.model.inertia[torso].mass,
+    );
+    assert!((m - s * m0).abs() < 1e-9, "torso: {m} kg for {s} × {m0} kg");
     let r = campaign(spec, 2);
     let nominal = r.scenario.nominal_mass_kg;
+    assert_eq!(nominal, prep.nominal_mass_kg);
     assert!((nominal - 28.0).abs() < 1.0, "quad16 nominal {nominal} kg");
     for c in &r.runs {
         let m = c.metrics.as_ref().expect("ran");
-        let expected: f64 = c.draws.link_mass_scale.values().count() as f64;
-        assert!(expected > 0.0);
+        assert!(!c.draws.link_mass_scale.is_empty());
         assert!(
             (m.total_mass_kg - nominal).abs() > 1e-6
                 && (m.total_mass_kg - nominal).abs() < 0.1 * nominal + 1e-9,
@@ -357,4 +376,37 @@ fn the_command_line_writes_its_files_and_keeps_to_its_limits() {
         v
     };
     assert_eq!(strip(&first), strip(&second));
+}
+
+#[test]
+fn friction_noise_and_start_reach_the_copy() {
+    use quadsim::scenario::format::GroundSpec;
+    let mut spec = CampaignSpec::new(root().join("scenarios/trot.toml"), 1);
+    spec.seed = 11;
+    spec.perturb.noise_scale = [0.5, 2.0];
+    let prep = Prepared::new(spec).unwrap();
+    let d = prep.draws(0);
+    let scn = prep.copy_scenario(&d).unwrap();
+    let w = &scn.file.world;
+    match &w.default_ground {
+        Some(GroundSpec::Custom(c)) => {
+            assert_eq!(c.friction, d.friction.unwrap());
+            // concrete's normal law kept
+            assert_eq!((c.stiffness_n_per_m, c.damping_ns_per_m), (100000.0, 1000.0));
+        }
+        other => panic!("default ground {other:?}"),
+    }
+    let r = &scn.file.robots[0];
+    assert_eq!(r.start_xy_m, Some([d.start_dx_m, d.start_dy_m]));
+    assert_eq!(r.start_yaw_deg, d.start_dyaw_deg);
+    // quad16's default IMU figures, scaled
+    let cfg = quadsim::engine::sensors::SensorConfig::defaults_for("quad16", 500.0);
+    let imu = r.sensors.imu.as_ref().expect("scaled IMU figures written");
+    let gyro = cfg.imu.unwrap().gyro.white_std;
+    assert!(gyro > 0.0);
+    assert_eq!(imu.gyro_noise_std_radps, Some(gyro * d.noise_scale));
+    assert!(d.noise_scale != 1.0);
+    // the copy builds and runs with them
+    let (world, _) = prep.build_copy(&d).unwrap();
+    assert!(world.steps > 0);
 }

@@ -733,7 +733,9 @@ impl Prepared {
         }
     }
 
-    fn simulate(&self, d: &Draws, trace: &mut Vec<(f64, f64, f64)>) -> Result<CopyMetrics, String> {
+    /// The world of a copy with draws `d`, ready for its first step (on one
+    /// thread), and the perturbed robot's root entity.
+    pub fn build_copy(&self, d: &Draws) -> Result<(World, Entity), String> {
         let scn = self.copy_scenario(d)?;
         let mut world = build_world(
             &scn,
@@ -748,6 +750,11 @@ impl Prepared {
         if !d.link_mass_scale.is_empty() {
             scale_masses(&mut world, root, &d.link_mass_scale);
         }
+        Ok((world, root))
+    }
+
+    fn simulate(&self, d: &Draws, trace: &mut Vec<(f64, f64, f64)>) -> Result<CopyMetrics, String> {
+        let (mut world, root) = self.build_copy(d)?;
         let total_mass_kg = world.sim.robot(root).expect("compiled").model.total_mass;
         let (hx, hy) = heading(self.start_yaw_deg(d));
         let forward = |w: &World| {
