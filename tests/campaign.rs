@@ -392,7 +392,10 @@ fn friction_noise_and_start_reach_the_copy() {
         Some(GroundSpec::Custom(c)) => {
             assert_eq!(c.friction, d.friction.unwrap());
             // concrete's normal law kept
-            assert_eq!((c.stiffness_n_per_m, c.damping_ns_per_m), (100000.0, 1000.0));
+            assert_eq!(
+                (c.stiffness_n_per_m, c.damping_ns_per_m),
+                (100000.0, 1000.0)
+            );
         }
         other => panic!("default ground {other:?}"),
     }
@@ -409,4 +412,97 @@ fn friction_noise_and_start_reach_the_copy() {
     // the copy builds and runs with them
     let (world, _) = prep.build_copy(&d).unwrap();
     assert!(world.steps > 0);
+}
+
+#[test]
+fn a_campaign_file_sets_the_campaign_and_flags_override_it() {
+    let (d, _) = limp("file");
+    let write = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let f = write(
+        "c.toml",
+        "format_version = 1\nkind = \"campaign\"\nbase = \"limp.toml\"\nname = \"limp case\"\n\
+         copies = 3\nseed = 9\nsteady_from_s = 1.0\nmax_falls = 2\n\
+         [perturbations]\nfriction = false\nnoise_scale = [0.5, 0.5]\nlink_mass_frac = 0.0\n",
+    );
+    let out = d.join("out");
+    let o = quadsim(
+        &["campaign", &f, "--quiet", "--out", out.to_str().unwrap()],
+        &d,
+    );
+    // three copies fall, two are allowed: exit 3
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("campaign.json")).unwrap()).unwrap();
+    assert_eq!(v["n"], 3);
+    assert_eq!(v["seed"], 9);
+    assert_eq!(v["case"], "limp case");
+    assert_eq!(v["perturbations"]["friction"], serde_json::Value::Null);
+    assert_eq!(
+        v["perturbations"]["noise_scale"],
+        serde_json::json!([0.5, 0.5])
+    );
+    assert_eq!(v["perturbations"]["link_mass_frac"], 0.0);
+    assert_eq!(v["perturbations"]["start_xy_m"], 0.02, "a default kept");
+    assert!(
+        v["scenario"]["path"]
+            .as_str()
+            .unwrap()
+            .ends_with("limp.toml")
+    );
+    // flags override the file
+    let o = quadsim(
+        &[
+            "campaign",
+            &f,
+            "--quiet",
+            "-n",
+            "2",
+            "--seed",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("campaign.json")).unwrap()).unwrap();
+    assert_eq!((v["n"].as_u64(), v["seed"].as_u64()), (Some(2), Some(4)));
+    // check validates it; run points to campaign
+    let o = quadsim(&["check", &f], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("campaign, 3 copies"));
+    let o = quadsim(&["run", &f], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("quadsim campaign"));
+    // an unknown key and a bad range name their line and key
+    let bad = write(
+        "bad.toml",
+        "format_version = 1\nkind = \"campaign\"\nbase = \"limp.toml\"\n[perturbations]\nfrction = [0.6, 1.0]\n",
+    );
+    let o = quadsim(&["campaign", &bad, "--out", "y"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("bad.toml:5") && e.contains("frction"), "{e}");
+    let bad = write(
+        "bad2.toml",
+        "format_version = 1\nkind = \"campaign\"\nbase = \"limp.toml\"\n[perturbations]\nfriction = [1.0, 0.6]\n",
+    );
+    let o = quadsim(&["campaign", &bad, "--out", "y"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad2.toml:5") && e.contains("perturbations.friction"),
+        "{e}"
+    );
+    assert!(!d.join("y").exists());
 }

@@ -8,24 +8,27 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use clap::Args;
 
 use crate::error::{CliError, bad};
-use crate::study::campaign::{CampaignSpec, Perturbations, Prepared, Timing, run_copies};
+use crate::study::campaign::{
+    CampaignSpec, Perturbations, Prepared, Timing, load_campaign_file, run_copies,
+};
 use crate::study::campaign_output::{TABLE_HEADER, table_row, write_all};
 
 /// Arguments of `quadsim campaign`.
 #[derive(Debug, Args)]
 pub struct CampaignArgs {
-    /// The scenario file.
+    /// The scenario file, or a campaign file (`kind = "campaign"`: a base
+    /// scenario and these settings; the flags override it).
     pub scenario: PathBuf,
-    /// Number of perturbed copies.
-    #[arg(short = 'n', long = "copies", default_value_t = 20, value_name = "N")]
-    pub copies: usize,
+    /// Number of perturbed copies (default 20).
+    #[arg(short = 'n', long = "copies", value_name = "N")]
+    pub copies: Option<usize>,
     /// Output directory (default `runs/<scenario name>-campaign/`); created
     /// if needed; an existing file is refused.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Campaign seed: every copy's draws derive from it and the copy number.
-    #[arg(long, default_value_t = 0, value_name = "S")]
-    pub seed: u64,
+    /// Campaign seed: every copy's draws derive from it and the copy number (default 0).
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
     /// Copies run at once, one thread each (0: one per core). Results do not depend on it.
     #[arg(long, default_value_t = 0, value_name = "T")]
     pub threads: usize,
@@ -35,13 +38,13 @@ pub struct CampaignArgs {
     /// Simulated duration of each copy (s; default the scenario's `world.duration_s`).
     #[arg(long, value_name = "S")]
     pub duration: Option<f64>,
-    /// Start of the steady-state speed window (s); it ends with the run.
-    #[arg(long, default_value_t = 2.0, value_name = "S")]
-    pub steady_from: f64,
-    /// Start of the torso height peak-to-peak window (s).
-    #[arg(long, default_value_t = 1.0, value_name = "S")]
-    pub height_from: f64,
-    /// Exit with code 3 when more than K copies fell (for CI).
+    /// Start of the steady-state speed window (s, default 2); it ends with the run.
+    #[arg(long, value_name = "S")]
+    pub steady_from: Option<f64>,
+    /// Start of the torso height peak-to-peak window (s, default 1).
+    #[arg(long, value_name = "S")]
+    pub height_from: Option<f64>,
+    /// Exit with code 3 when more than K copies fell or failed (for CI).
     #[arg(long, value_name = "K")]
     pub max_falls: Option<usize>,
     /// The case's label in the table (default: the scenario's name).
@@ -101,12 +104,13 @@ fn range(flag: &str, s: &str) -> Result<[f64; 2], CliError> {
     }
 }
 
-/// The perturbations from the flags.
-pub fn perturbations(a: &CampaignArgs) -> Result<Perturbations, CliError> {
+/// The perturbations: `base` (a campaign file's, or the defaults), or none
+/// with `--no-perturb`, then the flags.
+pub fn perturbations(a: &CampaignArgs, base: Perturbations) -> Result<Perturbations, CliError> {
     let mut p = if a.no_perturb {
         Perturbations::NONE
     } else {
-        Perturbations::default()
+        base
     };
     if let Some(s) = &a.start_xy_m {
         p.start_xy_m = half_width("start-xy-m", s)?;
@@ -156,23 +160,43 @@ pub fn prepare_out(out: &Path) -> Result<(), CliError> {
     })
 }
 
+/// The campaign of the arguments: a campaign file's settings (when the
+/// file is one) overridden by the flags; and the most falls allowed.
+pub fn spec(a: &CampaignArgs) -> Result<(CampaignSpec, Option<usize>), CliError> {
+    let is_file = std::fs::read_to_string(&a.scenario)
+        .ok()
+        .and_then(|s| crate::study::file_kind(&s))
+        .is_some_and(|k| k == "campaign");
+    let (mut spec, max_falls) = if is_file {
+        let f = load_campaign_file(&a.scenario).map_err(|e| bad(e.to_string()))?;
+        (f.spec, f.max_falls)
+    } else {
+        (CampaignSpec::new(&a.scenario, 20), None)
+    };
+    spec.perturb = perturbations(a, spec.perturb)?;
+    spec.copies = a.copies.unwrap_or(spec.copies);
+    spec.seed = a.seed.unwrap_or(spec.seed);
+    if a.robot.is_some() {
+        spec.robot = a.robot.clone();
+    }
+    if a.duration.is_some() {
+        spec.duration_s = a.duration;
+    }
+    spec.steady_from_s = a.steady_from.unwrap_or(spec.steady_from_s);
+    spec.height_from_s = a.height_from.unwrap_or(spec.height_from_s);
+    if a.case.is_some() {
+        spec.case = a.case.clone();
+    }
+    Ok((spec, a.max_falls.or(max_falls)))
+}
+
 /// Runs `quadsim campaign`.
 pub fn run(a: CampaignArgs) -> Result<(), CliError> {
-    let perturb = perturbations(&a)?;
+    let (spec, max_falls) = spec(&a)?;
     if let Some(out) = &a.out {
         prepare_out(out)?;
     }
-    let spec = CampaignSpec {
-        scenario: a.scenario.clone(),
-        copies: a.copies,
-        seed: a.seed,
-        robot: a.robot.clone(),
-        duration_s: a.duration,
-        steady_from_s: a.steady_from,
-        height_from_s: a.height_from,
-        perturb,
-        case: a.case.clone(),
-    };
+    let copies = spec.copies;
     let prep = Prepared::new(spec).map_err(|e| bad(e.to_string()))?;
     let out = match &a.out {
         Some(o) => o.clone(),
@@ -190,7 +214,7 @@ pub fn run(a: CampaignArgs) -> Result<(), CliError> {
     let bar = if a.quiet {
         indicatif::ProgressBar::hidden()
     } else {
-        indicatif::ProgressBar::new(a.copies as u64)
+        indicatif::ProgressBar::new(copies as u64)
     };
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -253,7 +277,7 @@ pub fn run(a: CampaignArgs) -> Result<(), CliError> {
             .collect::<Vec<_>>()
             .join(", ")
     );
-    if let Some(k) = a.max_falls
+    if let Some(k) = max_falls
         && ag.falls + ag.failed > k
     {
         return Err(CliError::Threshold(format!(

@@ -1103,3 +1103,146 @@ pub fn run_copies(
 pub fn out_file(dir: &Path, name: &str) -> PathBuf {
     dir.join(name)
 }
+
+/// A campaign file (`kind = "campaign"`): a base scenario and the
+/// campaign's settings, so that a campaign can be kept beside the scenarios
+/// and run again (`docs/campaign.md`). Every key but `base` is optional;
+/// the command line's flags override them.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignFile {
+    /// Must be 1.
+    pub format_version: i64,
+    /// `campaign`.
+    pub kind: String,
+    /// The case's label (default: the file's stem).
+    pub name: Option<String>,
+    /// The scenario, relative to this file.
+    pub base: String,
+    /// Number of copies (default 20).
+    pub copies: Option<usize>,
+    /// Campaign seed (default 0).
+    pub seed: Option<u64>,
+    /// The perturbed robot.
+    pub robot: Option<String>,
+    /// Simulated duration of each copy (s).
+    pub duration_s: Option<f64>,
+    /// Start of the steady-state speed window (s, default 2).
+    pub steady_from_s: Option<f64>,
+    /// Start of the torso height window (s, default 1).
+    pub height_from_s: Option<f64>,
+    /// Most copies allowed to fall (`--max-falls`).
+    pub max_falls: Option<usize>,
+    /// The perturbations (each default as the command line's).
+    #[serde(default)]
+    pub perturbations: PerturbationsFile,
+}
+
+/// `[perturbations]` of a campaign file.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerturbationsFile {
+    /// Half-width of the start offset along x and y (m; 0: none).
+    pub start_xy_m: Option<f64>,
+    /// Half-width of the start yaw offset (degrees; 0: none).
+    pub start_yaw_deg: Option<f64>,
+    /// Half-width of the link mass factor (0: none).
+    pub link_mass_frac: Option<f64>,
+    /// `[lo, hi]`, one μ, or `false` (the scenario's grounds).
+    pub friction: Option<toml::Value>,
+    /// Whether each copy draws its world seed.
+    pub world_seed: Option<bool>,
+    /// One factor or `[lo, hi]` on the sensors' noise figures.
+    pub noise_scale: Option<toml::Value>,
+}
+
+/// A campaign file's settings.
+#[derive(Debug, Clone)]
+pub struct LoadedCampaignFile {
+    /// The campaign (scenario: the base, relative to the file).
+    pub spec: CampaignSpec,
+    /// `max_falls`.
+    pub max_falls: Option<usize>,
+}
+
+/// `[lo, hi]` or one number `x` (`[x, x]`).
+fn value_range(v: &toml::Value) -> Option<[f64; 2]> {
+    match v {
+        toml::Value::Array(a) if a.len() == 2 => Some([as_f64(&a[0])?, as_f64(&a[1])?]),
+        x => as_f64(x).map(|x| [x, x]),
+    }
+}
+
+/// Reads a campaign file. Errors name the file, line and key.
+pub fn load_campaign_file(path: &Path) -> Result<LoadedCampaignFile, CampaignError> {
+    let src = std::fs::read_to_string(path).map_err(|e| {
+        err(format!(
+            "{}: cannot read the campaign file: {e}",
+            path.display()
+        ))
+    })?;
+    let loc = Locator { path, src: &src };
+    let at = |k: &str, m: String| err(loc.at(k, m).to_string());
+    let f: CampaignFile = toml::from_str(&src).map_err(|e| {
+        err(loc
+            .at_span(e.span(), e.message().trim().to_string())
+            .to_string())
+    })?;
+    if f.format_version != crate::scenario::FORMAT_VERSION {
+        return Err(at(
+            "format_version",
+            format!("must be {}", crate::scenario::FORMAT_VERSION),
+        ));
+    }
+    if f.kind != "campaign" {
+        return Err(at(
+            "kind",
+            format!("'{}': a campaign file has kind = \"campaign\"", f.kind),
+        ));
+    }
+    let base = path.parent().unwrap_or(Path::new(".")).join(&f.base);
+    let mut spec = CampaignSpec::new(base, f.copies.unwrap_or(20));
+    spec.seed = f.seed.unwrap_or(0);
+    spec.robot = f.robot;
+    spec.duration_s = f.duration_s;
+    spec.steady_from_s = f.steady_from_s.unwrap_or(spec.steady_from_s);
+    spec.height_from_s = f.height_from_s.unwrap_or(spec.height_from_s);
+    spec.case = Some(f.name.unwrap_or_else(|| {
+        path.file_stem()
+            .map_or("campaign".into(), |s| s.to_string_lossy().into_owned())
+    }));
+    let p = &f.perturbations;
+    let q = &mut spec.perturb;
+    q.start_xy_m = p.start_xy_m.unwrap_or(q.start_xy_m);
+    q.start_yaw_deg = p.start_yaw_deg.unwrap_or(q.start_yaw_deg);
+    q.link_mass_frac = p.link_mass_frac.unwrap_or(q.link_mass_frac);
+    q.world_seed = p.world_seed.unwrap_or(q.world_seed);
+    match &p.friction {
+        None => {}
+        Some(toml::Value::Boolean(false)) => q.friction = None,
+        Some(v) => {
+            q.friction = Some(value_range(v).ok_or_else(|| {
+                at(
+                    "perturbations.friction",
+                    "expected [lo, hi], one μ, or false (the scenario's grounds)".into(),
+                )
+            })?);
+        }
+    }
+    if let Some(v) = &p.noise_scale {
+        q.noise_scale = value_range(v).ok_or_else(|| {
+            at(
+                "perturbations.noise_scale",
+                "expected one factor or [lo, hi]".into(),
+            )
+        })?;
+    }
+    if let Err(e) = q.validate() {
+        let key = e.split(':').next().unwrap_or("").to_string();
+        return Err(at(&format!("perturbations.{key}"), e));
+    }
+    Ok(LoadedCampaignFile {
+        spec,
+        max_falls: f.max_falls,
+    })
+}

@@ -154,6 +154,9 @@ pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
                 "this is an optimisation study: run it with `quadsim optimize`",
             ));
         }
+        "campaign" => {
+            return Err(loc.at("kind", "this is a campaign: run it with `quadsim campaign`"));
+        }
         other => {
             return Err(loc.at(
                 "kind",
