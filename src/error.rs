@@ -2,7 +2,8 @@
 
 use thiserror::Error;
 
-/// An error reported to the user, with the exit code 2 for bad input and 1 otherwise.
+/// An error reported to the user, with the exit code 2 for bad input, 3 for a
+/// broken user limit and 1 otherwise.
 #[derive(Debug, Error)]
 pub enum CliError {
     /// Input that cannot be used: a file, line or field named in the message.
@@ -19,13 +20,18 @@ pub enum CliError {
     /// The simulation diverged: the robot, time and quantity are named.
     #[error("{0}")]
     Diverged(String),
+    /// The command ran, but its result broke a limit the user set
+    /// (`quadsim campaign --max-falls K`).
+    #[error("{0}")]
+    Threshold(String),
 }
 
 impl CliError {
-    /// Exit code: 2 for bad input, 1 for other failures.
+    /// Exit code: 2 for bad input, 3 for a broken user limit, 1 for other failures.
     pub fn exit_code(&self) -> i32 {
         match self {
             CliError::BadInput(_) => 2,
+            CliError::Threshold(_) => 3,
             CliError::Io { .. } | CliError::Diverged(_) => 1,
         }
     }

@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 
 pub mod bench;
+pub mod campaign;
 pub mod dashboard;
 pub mod dynamics;
 pub mod export;
@@ -49,6 +50,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Run a study's variants (`kind = "sweep"`) in parallel, or one shard of them.
     Sweep(sweep::SweepArgs),
+    /// Run N perturbed copies of a scenario: fall rate and speed tracking (`campaign.json`, `.csv`, `.md`, plot).
+    Campaign(campaign::CampaignArgs),
     /// Join the results of a sweep's shards.
     Merge(sweep::MergeArgs),
     /// Optimise scenario values by CMA-ES (`kind = "optimize"` study files).
@@ -71,6 +74,7 @@ pub fn run(cli: Cli) -> Result<(), crate::error::CliError> {
         Command::Export(a) => export::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Sweep(a) => sweep::sweep(a),
+        Command::Campaign(a) => campaign::run(a),
         Command::Merge(a) => sweep::merge(a),
         Command::Optimize(a) => optimize::run(a),
         Command::Monitor(a) => monitor::run(a),

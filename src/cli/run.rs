@@ -193,6 +193,19 @@ pub fn check(a: CheckArgs) -> Result<(), CliError> {
             );
             return Ok(());
         }
+        if kind == "campaign" {
+            let f = crate::study::campaign::load_campaign_file(&a.scenario)
+                .map_err(|e| CliError::BadInput(e.to_string()))?;
+            let (copies, base) = (f.spec.copies, f.spec.scenario.clone());
+            crate::study::campaign::Prepared::new(f.spec)
+                .map_err(|e| CliError::BadInput(e.to_string()))?;
+            println!(
+                "{}: ok (campaign, {copies} copies of {})",
+                a.scenario.display(),
+                base.display()
+            );
+            return Ok(());
+        }
         let study = crate::study::load_study(&a.scenario).map_err(scenario_error)?;
         println!(
             "{}: ok (study, kind = \"{kind}\", {} variants of {})",

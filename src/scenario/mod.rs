@@ -110,7 +110,11 @@ pub fn parse_scenario(path: &Path, src: String) -> Result<Scenario, ScenarioErro
             "kind",
             format!(
                 "this is a study file (kind = \"{kind}\"), not a scenario: run it with `quadsim {} {}`",
-                if kind == "optimize" { "optimize" } else { "sweep" },
+                match kind.as_str() {
+                    "optimize" => "optimize",
+                    "campaign" => "campaign",
+                    _ => "sweep",
+                },
                 path.display()
             ),
         ));

@@ -19,6 +19,8 @@
 //! and a merge of all shards give the same rows as one whole run.
 
 pub mod analysis;
+pub mod campaign;
+pub mod campaign_output;
 pub mod optimize;
 pub mod output;
 pub mod sample;
@@ -151,6 +153,9 @@ pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
                 "kind",
                 "this is an optimisation study: run it with `quadsim optimize`",
             ));
+        }
+        "campaign" => {
+            return Err(loc.at("kind", "this is a campaign: run it with `quadsim campaign`"));
         }
         other => {
             return Err(loc.at(
