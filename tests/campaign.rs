@@ -506,3 +506,30 @@ fn a_campaign_file_sets_the_campaign_and_flags_override_it() {
     );
     assert!(!d.join("y").exists());
 }
+
+#[test]
+fn the_fall_rate_interval_is_wilsons() {
+    use quadsim::study::campaign::wilson_95;
+    // reference values of the Wilson score interval at z = 1.96
+    let close = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 5e-4 && (a[1] - b[1]).abs() < 5e-4;
+    assert!(
+        close(wilson_95(0, 10), [0.0, 0.2775]),
+        "{:?}",
+        wilson_95(0, 10)
+    );
+    assert!(
+        close(wilson_95(5, 20), [0.1119, 0.4687]),
+        "{:?}",
+        wilson_95(5, 20)
+    );
+    assert!(
+        close(wilson_95(7, 50), [0.0695, 0.2619]),
+        "{:?}",
+        wilson_95(7, 50)
+    );
+    assert!(
+        close(wilson_95(10, 10), [0.7225, 1.0]),
+        "{:?}",
+        wilson_95(10, 10)
+    );
+}
