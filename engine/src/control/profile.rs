@@ -156,7 +156,10 @@ impl RobotProfile {
     /// (`s` the sink fraction, `h` the stance height) and `J_j` the foot
     /// point's velocity per unit rate of joint j (the engine's point
     /// Jacobian at `q`), and `kd_j = 2 ζ √(kp_j (M_jj + (m / n_feet) |J_j|²))`:
-    /// critically damped on the joint's share of the body it carries.
+    /// critically damped on the joint's share of the body it carries, but
+    /// at most `M_jj / T` for the control period `T` (s): a sampled damper
+    /// on a light link alone (a foot off the ground) is unstable past
+    /// `kd T / M_jj = 2`. Never below the bandwidth gains.
     pub fn stand_gains(
         &self,
         desc: &RobotDescription,
@@ -164,6 +167,7 @@ impl RobotProfile {
         q: &[f64],
         bandwidth_hz: f64,
         damping_ratio: f64,
+        control_period_s: f64,
     ) -> (Vec<f64>, Vec<f64>) {
         let mut data = Data::new(model);
         let (mut kp, mut kd) = bandwidth_gains(model, &mut data, q, bandwidth_hz, damping_ratio);
@@ -197,7 +201,8 @@ impl RobotProfile {
                     continue;
                 }
                 let kpj = k_leg * lever2;
-                let kdj = 2.0 * damping_ratio * (kpj * (diag[j - b] + mass * lever2)).sqrt();
+                let kdj = (2.0 * damping_ratio * (kpj * (diag[j - b] + mass * lever2)).sqrt())
+                    .min(diag[j - b] / control_period_s);
                 kp[j - b] = kp[j - b].max(kpj);
                 kd[j - b] = kd[j - b].max(kdj);
             }
