@@ -63,7 +63,7 @@ fn serial(desc: &RobotDescription, model: &Model) -> Vec<SerialLeg> {
         .unwrap()
         .into_iter()
         .map(|l| match l {
-            LegKinematics::Serial(l) => l,
+            LegKinematics::Serial(l) => *l,
             other => panic!("expected a serial leg, got {other:?}"),
         })
         .collect()

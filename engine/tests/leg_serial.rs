@@ -38,7 +38,7 @@ fn serial_legs(desc: &RobotDescription, model: &Model) -> Vec<SerialLeg> {
         .map(|&f| {
             let p = FootPoint::Contact.in_foot(desc, &model.frames[f].name);
             match LegKinematics::serial_from_model(model, f, p).unwrap() {
-                LegKinematics::Serial(l) => l,
+                LegKinematics::Serial(l) => *l,
                 other => panic!("{other:?}"),
             }
         })

@@ -175,7 +175,7 @@ impl RobotProfile {
             return (kp, kd);
         };
         let nf = model.feet.len();
-        if nf == 0 || !(self.stance_base_height_m > 0.0) {
+        if nf == 0 || self.stance_base_height_m.is_nan() || self.stance_base_height_m <= 0.0 {
             return (kp, kd);
         }
         let nv = model.nv;

@@ -149,8 +149,9 @@ pub enum LegKinematics {
     Quad16(Quad16Leg),
     /// A hip-yaw, hip-pitch, knee leg.
     Quad12(Quad12Leg),
-    /// Any other serial leg, solved numerically.
-    Serial(SerialLeg),
+    /// Any other serial leg, solved numerically (boxed: it holds the whole
+    /// chain).
+    Serial(Box<SerialLeg>),
 }
 
 impl LegKinematics {
@@ -192,7 +193,7 @@ impl LegKinematics {
         foot_frame: usize,
         point_in_foot_m: DVec3,
     ) -> Result<Self, LegError> {
-        SerialLeg::from_model(model, foot_frame, point_in_foot_m).map(Self::Serial)
+        SerialLeg::from_model(model, foot_frame, point_in_foot_m).map(|l| Self::Serial(Box::new(l)))
     }
 
     /// One leg per foot of `model` (in `model.feet` order), placing `point`.
