@@ -155,10 +155,12 @@ pub struct WalkerParams {
 }
 
 impl WalkerParams {
-    /// Defaults that work for `model` (compiled from `desc`): Study A's trot
-    /// and VMC gains for quad16 (0.5 m height target); other robots get the
-    /// same gains scaled by their mass ratio to quad16 (28 kg) and a height
-    /// target at 0.85 of their nominal stance height (quad16: 0.5 / 0.585).
+    /// Defaults that work for `model` (compiled from `desc`), from its
+    /// [`RobotProfile`] (no robot's name is compared here): Study A's trot
+    /// and VMC gains for quad16 (0.5 m height target, its built-in tuning);
+    /// other robots get the same gains scaled by their mass ratio to quad16
+    /// (28 kg) and a height target at 0.85 of their stance height (quad16:
+    /// 0.5 / 0.585).
     /// Swing gains: joint bandwidth gains ([`super::joint_pd::bandwidth_gains`]) at the
     /// nominal stance, 6 Hz, critically damped. Study A's timing (period
     /// 0.5 s, supports 0.1 / 0.15 s) but a 5 cm lift, not 17 cm.
