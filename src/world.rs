@@ -16,6 +16,7 @@ use quadsim_components::{
 use quadsim_engine::contact::{ContactKind, ContactPoint, ContactState};
 use quadsim_engine::control::joint_pd::{JointPd, bandwidth_gains, static_stance_torques};
 use quadsim_engine::control::prescribed::{Prescribed, PrescribedMode, PrescribedParams};
+use quadsim_engine::control::profile::{RobotProfile, STAND_BANDWIDTH_HZ};
 use quadsim_engine::control::vmc::VmcCommand;
 use quadsim_engine::control::walker::{Walker, WalkerParams};
 use quadsim_engine::description::{RobotDescription, Shape};
@@ -174,9 +175,13 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
                 ));
             }
             Some(j) => j.clone(),
-            None => robots::nominal_stance(&r.model)
-                .filter(|s| s.len() == nj)
-                .unwrap_or_else(|| vec![0.0; nj]),
+            // the profile's stance: a built-in's nominal one, else found
+            // from the model (feet under the hips, knees bent)
+            None => {
+                let mut named = desc.clone();
+                named.name = r.model.clone();
+                RobotProfile::from_model(&named, &model).stance_rad
+            }
         };
         let stance_height = robots::stance_base_height_m(&desc, &joints)
             .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
@@ -224,6 +229,7 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
             &loc,
             &p,
             every,
+            w.dt_s * every as f64,
             r,
             &model_desc,
             &model,
@@ -681,6 +687,7 @@ fn controller(
     loc: &Locator<'_>,
     p: &str,
     every_steps: u64,
+    control_period_s: f64,
     r: &crate::scenario::format::RobotSpec,
     desc: &RobotDescription,
     model: &Model,
@@ -717,13 +724,13 @@ fn controller(
                     ));
                 }
             };
-            let mut data = Data::new(model);
-            let (bkp, bkd) = bandwidth_gains(
+            let (bkp, bkd) = RobotProfile::from_model(desc, model).stand_gains(
+                desc,
                 model,
-                &mut data,
                 q,
-                get("bandwidth_hz", 4.0),
+                get("bandwidth_hz", STAND_BANDWIDTH_HZ),
                 get("damping_ratio", 1.0),
+                control_period_s,
             );
             let kp = per_joint(
                 loc,

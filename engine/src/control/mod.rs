@@ -6,6 +6,7 @@ pub mod active_set;
 pub mod force_qp;
 pub mod joint_pd;
 pub mod prescribed;
+pub mod profile;
 pub mod vmc;
 pub mod walker;
 pub mod wbc;

@@ -52,7 +52,7 @@ use crate::terrain::{Terrain, TerrainUnion};
 use glam::{DMat3, DVec2, DVec3};
 
 use super::force_qp::{FootForces, ForceQp, ForceQpParams, MAX_FEET, StanceFoot, stance_torques};
-use super::joint_pd::bandwidth_gains;
+use super::profile::RobotProfile;
 use super::vmc::{Vmc, VmcCommand, VmcInput, VmcParams};
 use super::wbc::{BodyTask, ContactTask, JointTask, PointTask, WbcParams, WholeBody};
 
@@ -174,11 +174,13 @@ pub struct WalkerParams {
 }
 
 impl WalkerParams {
-    /// Defaults that work for `model` (compiled from `desc`): Study A's trot
-    /// and VMC gains for quad16 (0.5 m height target); other robots get the
-    /// same gains scaled by their mass ratio to quad16 (28 kg) and a height
-    /// target at 0.85 of their nominal stance height (quad16: 0.5 / 0.585).
-    /// Swing gains: joint bandwidth gains ([`bandwidth_gains`]) at the
+    /// Defaults that work for `model` (compiled from `desc`), from its
+    /// [`RobotProfile`] (no robot's name is compared here): Study A's trot
+    /// and VMC gains for quad16 (0.5 m height target, its built-in tuning);
+    /// other robots get the same gains scaled by their mass ratio to quad16
+    /// (28 kg) and a height target at 0.85 of their stance height (quad16:
+    /// 0.5 / 0.585).
+    /// Swing gains: joint bandwidth gains ([`super::joint_pd::bandwidth_gains`]) at the
     /// nominal stance, 6 Hz, critically damped. Study A's timing (period
     /// 0.5 s, supports 0.1 / 0.15 s) but a 5 cm lift, not 17 cm.
     ///
@@ -203,28 +205,26 @@ impl WalkerParams {
     /// on a foot 87 mm out, less the leg's own weight), more than quad12's
     /// default 3 N·m; at 3, 4 and 5 N·m it sinks and falls within 2–10 s.
     pub fn default_for(desc: &RobotDescription, model: &Model) -> WalkerParams {
-        let nj = model.nv - model.base_nv();
-        let stance = crate::robots::nominal_stance(&desc.name)
-            .filter(|s| s.len() == nj)
-            .unwrap_or_else(|| vec![0.0; nj]);
-        let stance_h = crate::robots::stance_base_height_m(desc, &stance).unwrap_or(0.585);
-        let mut q = vec![0.0, 0.0, stance_h, 0.0, 0.0, 0.0, 1.0];
-        q.extend_from_slice(&stance);
-        q.resize(model.nq, 0.0);
-        let mut data = Data::new(model);
-        let (kp, kd) = bandwidth_gains(model, &mut data, &q, 6.0, 1.0);
+        Self::from_profile(&RobotProfile::from_model(desc, model), model)
+    }
+
+    /// [`Self::default_for`] from a robot's profile: Study A's VMC gains
+    /// times [`RobotProfile::vmc_gain_scale`], the torso height target
+    /// [`RobotProfile::walk_height_m`], the swing gains
+    /// [`RobotProfile::swing_gains`] and the placement hips
+    /// [`RobotProfile::placement_hips_m`]; the step limits and lift scale
+    /// with the height target (Study A's at 0.5 m).
+    pub fn from_profile(profile: &RobotProfile, model: &Model) -> WalkerParams {
+        let (kp, kd) = profile.swing_gains(model);
         let g = model.gravity.length();
         let mut vmc = VmcParams::for_model(model);
-        let is_quad16 = desc.name == "quad16";
-        if !is_quad16 {
-            let r = model.total_mass / QUAD16_MASS_KG;
-            let gn = &mut vmc.gains;
-            gn.stiffness_npm *= r;
-            gn.damping_nspm *= r;
-            gn.stiffness_nm_per_rad *= r;
-            gn.damping_nms_per_rad *= r;
-            vmc.base_height_m = 0.85 * stance_h;
-        }
+        let r = profile.vmc_gain_scale;
+        let gn = &mut vmc.gains;
+        gn.stiffness_npm *= r;
+        gn.damping_nspm *= r;
+        gn.stiffness_nm_per_rad *= r;
+        gn.damping_nms_per_rad *= r;
+        vmc.base_height_m = profile.walk_height_m;
         let h = vmc.base_height_m;
         let scale = h / 0.5;
         WalkerParams {
@@ -257,7 +257,7 @@ impl WalkerParams {
             stance_needs_contact: false,
             swing_in_level_frame: true,
             knee_guard_rad: 0.5,
-            placement_hips_m: placement_hips(desc, model, &stance),
+            placement_hips_m: profile.placement_hips_m.clone(),
             whole_body: false,
             wbc: WbcParams::default(),
             swing_task_gains: (900.0, 60.0),
@@ -266,32 +266,6 @@ impl WalkerParams {
         }
     }
 }
-
-/// quad12's placement hips ([`WalkerParams::placement_hips_m`]): each foot's
-/// contact point at the nominal stance (87 mm out along the leg from the hip
-/// pitch axis, 50 mm across it), at the mount's height. Empty for other
-/// robots (their mounts are their hips).
-fn placement_hips(desc: &RobotDescription, model: &Model, stance: &[f64]) -> Vec<DVec3> {
-    if desc.name != crate::robots::quad12::NAME {
-        return Vec::new();
-    }
-    let Ok(legs) = LegKinematics::for_robot(desc, model, FootPoint::Contact) else {
-        return Vec::new();
-    };
-    let nq0 = model.base_nq();
-    legs.iter()
-        .map(|leg| {
-            let a: Vec<f64> = leg.q_indices().iter().map(|&i| stance[i - nq0]).collect();
-            let mut p = leg.fk(&a);
-            p.z = leg.mount().trans.z;
-            p
-        })
-        .collect()
-}
-
-/// quad16's total mass (kg), the reference of [`WalkerParams::default_for`]'s
-/// gain scaling.
-const QUAD16_MASS_KG: f64 = 28.0;
 
 /// [`WalkerParams::stance_foot_press`] and [`WalkerParams::friction_fraction`]
 /// that make quad16's trot at 0.75 m/s and its blind step-up hold from
@@ -369,7 +343,7 @@ fn quad16_legs_in_lanes(legs: &[LegKinematics]) -> Option<Quad16Legs> {
         .iter()
         .filter_map(|l| match l {
             LegKinematics::Quad16(l) => Some(l),
-            LegKinematics::Quad12(_) => None,
+            _ => None,
         })
         .collect();
     Quad16Legs::new(legs.try_into().ok()?)

@@ -6,6 +6,12 @@
 //! |---|---|---|
 //! | quad16 (study A) | hip roll (x), hip pitch (y), knee (y), ankle (y) | [`quad16_leg`] |
 //! | quad12 (study B) | hip yaw (z), hip pitch (y), knee (y) | [`quad12_leg`] |
+//! | any other 3- or 4-DOF serial leg | hip abduction (~x) or yaw (~z), hip pitch (~y), knee (~y), optional ankle (~y), any signs | [`serial_leg`] |
+//!
+//! The closed forms are fast paths: [`LegKinematics::from_model`] takes
+//! them where the chain fits them exactly and the numerical
+//! [`SerialLeg`] (damped least squares on the leg's point Jacobian)
+//! otherwise; a test shows the two agree where both apply.
 //!
 //! Each leg gives its foot point in the **base (torso) frame** as a function of
 //! its joint angles ([`Quad16Leg::fk`]), the inverse in closed form
@@ -42,12 +48,14 @@
 pub mod ik;
 pub mod quad12_leg;
 pub mod quad16_leg;
+pub mod serial_leg;
 pub mod study_b;
 pub mod study_b_dynamics;
 
 pub use ik::{AnkleMode, IkClamped, IkError, IkOptions, KneeBranch, wrap_angle};
 pub use quad12_leg::Quad12Leg;
 pub use quad16_leg::Quad16Leg;
+pub use serial_leg::{HipKind, IkStats, SerialLeg};
 
 use crate::description::{RobotDescription, Shape};
 use crate::model::{JointType, Model};
@@ -84,6 +92,16 @@ pub enum LegError {
         /// The offending field (`type`, `axis`, `origin`).
         field: &'static str,
         /// What the closed form needs.
+        why: String,
+    },
+    /// The chain to a foot is no 3- or 4-DOF serial leg.
+    #[error("foot '{foot}': joint '{joint}' {why}")]
+    Serial {
+        /// Foot frame name.
+        foot: String,
+        /// The offending joint.
+        joint: String,
+        /// What a serial leg needs.
         why: String,
     },
 }
@@ -131,25 +149,51 @@ pub enum LegKinematics {
     Quad16(Quad16Leg),
     /// A hip-yaw, hip-pitch, knee leg.
     Quad12(Quad12Leg),
+    /// Any other serial leg, solved numerically (boxed: it holds the whole
+    /// chain).
+    Serial(Box<SerialLeg>),
 }
 
 impl LegKinematics {
-    /// The leg ending at `foot_frame`, of the kind its joint chain has (four
-    /// joints: [`Quad16Leg`], three: [`Quad12Leg`]).
+    /// The leg ending at `foot_frame`: a closed form where the chain fits
+    /// one exactly (four joints: [`Quad16Leg`], three: [`Quad12Leg`]), else
+    /// a [`SerialLeg`].
     ///
     /// # Errors
-    /// [`LegError`] when the chain fits neither.
+    /// [`LegError`] when the chain is no serial leg either (the
+    /// [`SerialLeg::from_model`] error, naming the foot and the joint).
     pub fn from_model(
         model: &Model,
         foot_frame: usize,
         point_in_foot_m: DVec3,
     ) -> Result<Self, LegError> {
         let n = chain_bodies(model, foot_frame)?.len();
-        if n == 3 {
-            Quad12Leg::from_model(model, foot_frame, point_in_foot_m).map(Self::Quad12)
-        } else {
-            Quad16Leg::from_model(model, foot_frame, point_in_foot_m).map(Self::Quad16)
+        let closed = match n {
+            3 => Quad12Leg::from_model(model, foot_frame, point_in_foot_m)
+                .map(Self::Quad12)
+                .ok(),
+            4 => Quad16Leg::from_model(model, foot_frame, point_in_foot_m)
+                .map(Self::Quad16)
+                .ok(),
+            _ => None,
+        };
+        match closed {
+            Some(leg) => Ok(leg),
+            None => Self::serial_from_model(model, foot_frame, point_in_foot_m),
         }
+    }
+
+    /// The leg ending at `foot_frame` as a [`SerialLeg`] whatever its shape
+    /// (no closed form): for comparisons with the closed forms.
+    ///
+    /// # Errors
+    /// Those of [`SerialLeg::from_model`].
+    pub fn serial_from_model(
+        model: &Model,
+        foot_frame: usize,
+        point_in_foot_m: DVec3,
+    ) -> Result<Self, LegError> {
+        SerialLeg::from_model(model, foot_frame, point_in_foot_m).map(|l| Self::Serial(Box::new(l)))
     }
 
     /// One leg per foot of `model` (in `model.feet` order), placing `point`.
@@ -178,6 +222,7 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => l.q_indices(),
             Self::Quad12(l) => l.q_indices(),
+            Self::Serial(l) => l.q_indices(),
         }
     }
 
@@ -186,6 +231,7 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => l.v_indices(),
             Self::Quad12(l) => l.v_indices(),
+            Self::Serial(l) => l.v_indices(),
         }
     }
 
@@ -194,6 +240,7 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => l.foot_frame(),
             Self::Quad12(l) => l.foot_frame(),
+            Self::Serial(l) => l.foot_frame(),
         }
     }
 
@@ -202,6 +249,7 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => l.mount(),
             Self::Quad12(l) => l.mount(),
+            Self::Serial(l) => l.mount(),
         }
     }
 
@@ -213,6 +261,10 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => l.fk(a.try_into().expect("4 leg angles")),
             Self::Quad12(l) => l.fk(a.try_into().expect("3 leg angles")),
+            Self::Serial(l) => {
+                assert_eq!(a.len(), l.dof(), "one angle per leg joint");
+                l.fk(a)
+            }
         }
     }
 
@@ -232,6 +284,7 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => out.copy_from_slice(&l.ik(target_m, opts)?),
             Self::Quad12(l) => out.copy_from_slice(&l.ik(target_m, opts)?),
+            Self::Serial(l) => out.copy_from_slice(&l.ik(target_m, opts)?),
         }
         Ok(())
     }
@@ -262,6 +315,10 @@ impl LegKinematics {
                 out.copy_from_slice(&a);
                 clamped
             }
+            Self::Serial(l) => {
+                assert_eq!(out.len(), l.dof(), "one angle per leg joint");
+                l.ik_clamped_into(target_m, opts, out)?
+            }
         };
         Ok(clamped)
     }
@@ -276,6 +333,10 @@ impl LegKinematics {
         match self {
             Self::Quad16(l) => Some(l.ik_clamped_ankle(target_m, opts)),
             Self::Quad12(_) => None,
+            Self::Serial(l) if l.dof() == 4 => {
+                Some(l.ik_clamped(target_m, opts).map(|c| c.angles_rad[3]))
+            }
+            Self::Serial(_) => None,
         }
     }
 
@@ -305,6 +366,13 @@ impl LegKinematics {
                 foot_velocity,
                 opts,
             )?),
+            Self::Serial(l) => {
+                assert!(
+                    a.len() == l.dof() && out.len() == l.dof(),
+                    "one angle per leg joint"
+                );
+                l.joint_velocities_into(a, foot_velocity, opts, out)?
+            }
         }
         Ok(())
     }

@@ -142,9 +142,74 @@ pub fn nominal_stance(name: &str) -> Option<Vec<f64>> {
     }
 }
 
+/// What a built-in robot states for its controllers beyond its model
+/// (read through [`crate::control::profile::RobotProfile`]; a robot
+/// without an entry gets the profile's rules from its model).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuiltinTuning {
+    /// Nominal standing joint angles (rad, q order): [`nominal_stance`].
+    pub stance_rad: Vec<f64>,
+    /// The walking controller's torso height target (m); `None`: the
+    /// profile's rule (0.85 of the stance height).
+    pub walk_height_m: Option<f64>,
+    /// Factor on Study A's VMC gains; `None`: the profile's rule (the mass
+    /// ratio to quad16's 28 kg).
+    pub vmc_gain_scale: Option<f64>,
+    /// Whether the stand controller's default gains are the joint bandwidth
+    /// gains alone (the built-ins' tuned rule, their legs a large part of
+    /// their mass) rather than the profile's leg-stiffness rule.
+    pub stand_gains_by_bandwidth: bool,
+}
+
+/// The tuning of a built-in robot by its name, `None` for an unknown name.
+///
+/// - `quad16`: Study A's VMC gains unscaled and its 0.5 m torso height
+///   (Study A's table is quad16's own, at any parameter values).
+/// - `quad12`: the profile's rules (gains scaled by its mass, height 0.85 of
+///   the stance's).
+///
+/// Both keep the joint bandwidth gains for standing.
+pub fn builtin_tuning(name: &str) -> Option<BuiltinTuning> {
+    let stance_rad = nominal_stance(name)?;
+    let study_a = name == quad16::NAME;
+    Some(BuiltinTuning {
+        stance_rad,
+        walk_height_m: study_a.then_some(0.5),
+        vmc_gain_scale: study_a.then_some(1.0),
+        stand_gains_by_bandwidth: true,
+    })
+}
+
+/// The lowest point (m, body frame of the foot's body) and its sphere's
+/// radius of each foot of `model`, as the contact model sees it: the
+/// description's foot point when it names one, else the centre and radius of
+/// the foot link's first collision sphere, else the link origin.
+fn foot_contacts(desc: &RobotDescription, model: &Model) -> Vec<(usize, DVec3, f64)> {
+    model
+        .feet
+        .iter()
+        .map(|&f| {
+            let frame = &model.frames[f];
+            let named = desc.foot_points.iter().find(|(n, _)| *n == frame.name);
+            let sphere = desc.link(&frame.name).and_then(|l| {
+                l.collision.iter().find_map(|g| match g.shape {
+                    Shape::Sphere { radius_m } => Some((g.origin.trans, radius_m)),
+                    _ => None,
+                })
+            });
+            match (named, sphere) {
+                (Some((_, p)), _) => (f, *p, 0.0),
+                (None, Some((c, r))) => (f, c, r),
+                (None, None) => (f, DVec3::ZERO, 0.0),
+            }
+        })
+        .collect()
+}
+
 /// Height of the base origin above flat ground (m) at which the lowest foot
 /// contact point of `desc` touches the ground with the base level and the
-/// joints at `joints_rad` (q order).
+/// joints at `joints_rad` (q order). A foot the description gives no
+/// contact point but a collision sphere touches with the sphere's bottom.
 ///
 /// # Errors
 /// Those of [`Model::from_description`].
@@ -159,16 +224,10 @@ pub fn stance_base_height_m(
     assert_eq!(joints_rad.len(), model.nq, "one angle per movable joint");
     let mut data = Data::new(&model);
     forward_kinematics_pos(&model, &mut data, joints_rad);
-    let lowest = model
-        .feet
-        .iter()
-        .map(|&f| {
-            let point = desc
-                .foot_points
-                .iter()
-                .find(|(n, _)| *n == model.frames[f].name)
-                .map_or(DVec3::ZERO, |(_, p)| *p);
-            frame_pose(&model, &data, f).transform_point(point).z
+    let lowest = foot_contacts(desc, &model)
+        .into_iter()
+        .map(|(f, point, radius_m)| {
+            frame_pose(&model, &data, f).transform_point(point).z - radius_m
         })
         .fold(f64::INFINITY, f64::min);
     Ok(-lowest)
