@@ -927,17 +927,7 @@ impl Walker {
             } else {
                 0.0
             };
-            let friction = input
-                .terrain
-                .closest_with_material(self.feet_world[i])
-                .map_or(0.5, |(_, m)| m.friction)
-                * self.params.friction_fraction;
-            let n = input
-                .normals
-                .get(i)
-                .copied()
-                .filter(|n| n.length_squared() > 0.5)
-                .unwrap_or(DVec3::Z);
+            let (friction, n) = self.foot_ground(input, i);
             feet[i] = StanceFoot {
                 position_m: self.feet_world[i] - com,
                 normal: n,
@@ -1020,6 +1010,24 @@ impl Walker {
 }
 
 impl Walker {
+    /// The friction the force plan may use at foot `i` (the ground's μ under
+    /// it times [`WalkerParams::friction_fraction`]; 0.5 off every terrain)
+    /// and the ground's normal there (unit, world; +z when unknown).
+    fn foot_ground(&self, input: &WalkerInput<'_>, i: usize) -> (f64, DVec3) {
+        let friction = input
+            .terrain
+            .closest_with_material(self.feet_world[i])
+            .map_or(0.5, |(_, m)| m.friction)
+            * self.params.friction_fraction;
+        let n = input
+            .normals
+            .get(i)
+            .copied()
+            .filter(|n| n.length_squared() > 0.5)
+            .unwrap_or(DVec3::Z);
+        (friction, n)
+    }
+
     /// Steps 7–8 under the whole-body layer: stance feet that touch carry the
     /// planned forces as contacts; swing feet (and planned stance feet off
     /// the ground, pressed back down) track their references as point tasks;
@@ -1072,17 +1080,7 @@ impl Walker {
             let vel = data.vel[li.body].point_velocity(p - data.origin);
             let stance = leg.phase == LegPhase::Stance;
             if stance && touching {
-                let friction = input
-                    .terrain
-                    .closest_with_material(p)
-                    .map_or(0.5, |(_, m)| m.friction)
-                    * self.params.friction_fraction;
-                let normal = input
-                    .normals
-                    .get(i)
-                    .copied()
-                    .filter(|n| n.length_squared() > 0.5)
-                    .unwrap_or(DVec3::Z);
+                let (friction, normal) = self.foot_ground(input, i);
                 contacts[nc] = ContactTask {
                     body: li.body,
                     point_m: p,
