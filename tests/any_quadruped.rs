@@ -311,6 +311,7 @@ fn perturbed_masses(text: &str, rng: &mut ChaCha8Rng, spread: f64) -> String {
 
 struct Stand {
     diverged: bool,
+    drift_m: f64,
     fell: bool,
     fell_at_s: Option<f64>,
     mean_speed_mps: f64,
@@ -343,9 +344,10 @@ fn stand(urdf: &str, xy: [f64; 2], yaw_deg: f64, controller: Option<&str>, secon
     let scn = parse_scenario(&path, src).unwrap();
     let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let root = w.robots[0].1;
-    let start_z = w.sim.robot(root).unwrap().state.q[2];
+    let start = w.sim.robot(root).unwrap().state.q[..3].to_vec();
+    let start_z = start[2];
     let (mut min_z, mut max_z, mut max_tilt) = (f64::INFINITY, f64::NEG_INFINITY, 0.0_f64);
-    let chunk = 20;
+    let chunk = 40;
     let mut done = 0;
     while done < w.steps {
         let n = chunk.min(w.steps - done);
@@ -362,7 +364,10 @@ fn stand(urdf: &str, xy: [f64; 2], yaw_deg: f64, controller: Option<&str>, secon
     if let Some(d) = run.diverged {
         println!("diverged: {d:?}");
     }
+    let q = &w.sim.robot(root).unwrap().state.q;
+    let drift_m = (q[0] - start[0]).hypot(q[1] - start[1]);
     Stand {
+        drift_m,
         diverged: run.diverged.is_some(),
         fell: m.fell,
         fell_at_s: m.fell_at_s,
@@ -378,7 +383,8 @@ fn stand(urdf: &str, xy: [f64; 2], yaw_deg: f64, controller: Option<&str>, secon
 /// Issue 27: the default `joint_pd` gains hold the Mini-Cheetah-sized
 /// robot standing for 5 s from 12 perturbed starts (position ±5 cm, yaw
 /// ±30°, every link's mass ±10 %): no fall, the torso within 2 cm below
-/// and 5 mm above its start height, tilt under 0.05 rad.
+/// and 5 mm above its start height, tilt under 0.05 rad, horizontal drift
+/// under 1 cm.
 #[test]
 fn mini_cheetah_stands_under_default_joint_pd_from_perturbed_starts() {
     let text = urdf_text();
@@ -397,8 +403,9 @@ fn mini_cheetah_stands_under_default_joint_pd_from_perturbed_starts() {
         };
         let s = stand(&urdf, xy, yaw, None, 5.0);
         println!(
-            "start {k}: xy {xy:?} yaw {yaw:.1}°: torso {:.4}..{:.4} m (start {:.4}), tilt ≤ {:.4} rad, fell {}",
-            s.min_z, s.max_z, s.start_z, s.max_tilt, s.fell
+            "start {k}: xy {xy:?} yaw {yaw:.1}°: torso {:.4}..{:.4} m (start {:.4}), tilt ≤ {:.4} rad, \
+             drift {:.4} m, fell {}",
+            s.min_z, s.max_z, s.start_z, s.max_tilt, s.drift_m, s.fell
         );
         assert!(!s.fell && !s.diverged, "start {k} fell or diverged");
         assert!(
@@ -406,6 +413,7 @@ fn mini_cheetah_stands_under_default_joint_pd_from_perturbed_starts() {
             "start {k}"
         );
         assert!(s.max_tilt < 0.05, "start {k}: tilt {}", s.max_tilt);
+        assert!(s.drift_m < 0.01, "start {k}: drifted {} m", s.drift_m);
     }
 }
 
@@ -419,7 +427,7 @@ fn mini_cheetah_under_the_vmc_walker() {
         ("trot in place", "kind = \"vmc\""),
         ("trot 0.5 m/s", "kind = \"vmc\"\nv_x_mps = 0.5"),
     ] {
-        let s = stand(&urdf_text(), [0.0, 0.0], 0.0, Some(extra), 3.0);
+        let s = stand(&urdf_text(), [0.0, 0.0], 0.0, Some(extra), 5.0);
         println!(
             "vmc {label}: torso {:.4}..{:.4} m (start {:.4}), tilt ≤ {:.3} rad, fell {} at {:?} s, \
              mean speed {:.3} m/s, {} touchdowns",
