@@ -178,7 +178,7 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
             }
             let links = figs
                 .iter()
-                .map(|(caption, f)| (caption.clone(), f.stem.clone()))
+                .map(|(caption, f)| (caption.clone(), crate::names::safe_file_stem(&f.stem)))
                 .collect();
             figures.push((name.clone(), links));
         }
