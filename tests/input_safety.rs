@@ -171,10 +171,7 @@ fn non_physical_urdfs_are_refused_with_file_line_and_field() {
     assert!(e.contains("triangle inequality"), "{e}");
     // a negative box size
     let (e, _) = urdf_err(|s| s.replace("size=\"0.6 0.3 0.1\"", "size=\"-0.6 0.3 0.1\""));
-    assert!(
-        e.contains("box size") && e.contains("><geometry>"),
-        "{e}"
-    );
+    assert!(e.contains("box size") && e.contains("><geometry>"), "{e}");
 }
 
 #[test]
@@ -477,12 +474,17 @@ fn a_long_urdf_chain_is_rejected_quickly() {
         .unwrap_err()
         .to_string();
     let took = t.elapsed();
-    assert!(e.contains("5000 <link>") || e.contains("5001 <link>"), "{e}");
+    assert!(
+        e.contains("5000 <link>") || e.contains("5001 <link>"),
+        "{e}"
+    );
     assert!(took < Duration::from_secs(1), "{took:?} for {n} joints");
     // below the limit, compiling the model is linear: 1,000 joints in well
     // under a second (the name lookups were scans: quadratic)
     let n = 999;
-    let mut s = String::from("<robot name=\"chain\">\n<link name=\"l0\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" izz=\"0.1\"/></inertial></link>\n");
+    let mut s = String::from(
+        "<robot name=\"chain\">\n<link name=\"l0\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" izz=\"0.1\"/></inertial></link>\n",
+    );
     for i in 1..=n {
         s += &format!(
             "<link name=\"l{i}\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" izz=\"0.1\"/></inertial></link>\n<joint name=\"j{i}\" type=\"continuous\"><parent link=\"l{}\"/><child link=\"l{i}\"/><axis xyz=\"0 0 1\"/></joint>\n",
@@ -492,7 +494,11 @@ fn a_long_urdf_chain_is_rejected_quickly() {
     s += "</robot>\n";
     let t = Instant::now();
     quadsim::urdf::parse_urdf(&s, "chain.urdf", Path::new("."), &Default::default()).unwrap();
-    assert!(t.elapsed() < Duration::from_secs(1), "{:?} for {n} joints", t.elapsed());
+    assert!(
+        t.elapsed() < Duration::from_secs(1),
+        "{:?} for {n} joints",
+        t.elapsed()
+    );
 }
 
 // ---- scripted use -------------------------------------------------------------
@@ -518,4 +524,35 @@ fn replay_without_a_terminal_prints_text() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("rex"));
+}
+
+#[test]
+fn stability_warnings_name_the_terrain_that_is_stiff() {
+    // the file lists the soft terrain first; the ground keeps its patches
+    // sorted by name, and the warning must still name the stiff one
+    let src = GOOD.replace(
+        "[[terrains]]\nname = \"floor\"\nkind = \"flat\"\n",
+        "[[terrains]]\nname = \"floor\"\nkind = \"flat\"\n\n[[terrains]]\nname = \"a_hard\"\nkind = \"flat\"\norigin_m = [30.0, 0.0, 0.0]\nground = { stiffness_n_per_m = 1.0e11, damping_ns_per_m = 0.0, friction = 0.8 }\n",
+    );
+    let s = parse_scenario(Path::new("w.toml"), src).unwrap();
+    let w = build_world(&s, Overrides::default()).unwrap();
+    let warnings = quadsim::cli::run::stability_warnings(&s, &w);
+    assert!(!warnings.is_empty());
+    for m in &warnings {
+        assert!(m.contains("terrain 'a_hard'"), "{m}");
+    }
+}
+
+#[test]
+fn a_herd_robot_keeps_its_model_in_the_report() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/herd.toml"))
+        .unwrap();
+    let q16 = quadsim::report::robot_info(&text, "q16-000");
+    assert_eq!(q16.model, "quad16");
+    assert_eq!(q16.controller, "vmc");
+    assert_eq!(
+        quadsim::report::robot_info(&text, "q12-029").model,
+        "quad12"
+    );
+    assert_eq!(quadsim::report::robot_info(&text, "nobody").model, "");
 }

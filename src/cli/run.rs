@@ -123,11 +123,14 @@ pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
     if let Some(d) = ground.default_ground() {
         materials.push(("world.default_ground".into(), d.material));
     }
+    // the union holds the patches sorted by terrain name (systems' ground
+    // compile), not in file order
+    let mut names: Vec<&str> = scn.file.terrains.iter().map(|t| t.name.as_str()).collect();
+    names.sort_unstable();
     for (i, p) in ground.patches().iter().enumerate() {
-        let name = scn.file.terrains.get(i).map_or_else(
-            || format!("terrain {i}"),
-            |t| format!("terrain '{}'", t.name),
-        );
+        let name = names
+            .get(i)
+            .map_or_else(|| format!("terrain {i}"), |t| format!("terrain '{t}'"));
         materials.push((name, *p.material()));
     }
     let dt = scn.file.world.dt_s;
