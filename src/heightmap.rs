@@ -190,6 +190,13 @@ pub fn read_heightmap(path: &Path) -> Result<HeightGrid, HeightmapError> {
             path: path.to_path_buf(),
         });
     }
+    if meta.len() > crate::limits::MAX_HEIGHTMAP_FILE_BYTES {
+        return Err(io(std::io::Error::other(format!(
+            "{} bytes is larger than the {} MiB a heightmap file may be",
+            meta.len(),
+            crate::limits::MAX_HEIGHTMAP_FILE_BYTES >> 20
+        ))));
+    }
     let file = File::open(path).map_err(io)?;
     let grid = match format {
         HeightmapFormat::Png => read_png(path, BufReader::new(file))?,

@@ -229,6 +229,11 @@ pub fn terrain_patch(
     TerrainPatch::new(shape, DVec3::from_array(t.origin_m), yaw, material).map_err(err)
 }
 
+/// The finest heightmap sample spacing (m).
+pub const MIN_HEIGHTMAP_SPACING_M: f64 = 1.0e-4;
+/// The coarsest heightmap sample spacing (m).
+pub const MAX_HEIGHTMAP_SPACING_M: f64 = 1.0e3;
+
 /// The height field of a `kind = "heightmap"` entry: the file (relative to
 /// the scenario's directory, see [`crate::heightmap`] for formats and
 /// orientation) sampled every `horizontal_scale_m` along x and y and centred
@@ -250,8 +255,29 @@ fn heightmap_field(
         .ok_or_else(|| loc.at(p, "terrain kind 'heightmap' needs 'horizontal_scale_m'"))?;
     let vertical = num(t, "vertical_scale_m")
         .ok_or_else(|| loc.at(p, "terrain kind 'heightmap' needs 'vertical_scale_m'"))?;
+    if !(MIN_HEIGHTMAP_SPACING_M..=MAX_HEIGHTMAP_SPACING_M).contains(&spacing) {
+        return Err(loc.at(
+            &format!("{p}.horizontal_scale_m"),
+            format!(
+                "{spacing:e} m is outside [{MIN_HEIGHTMAP_SPACING_M}, {MAX_HEIGHTMAP_SPACING_M}] m"
+            ),
+        ));
+    }
     let path = base_dir.join(file);
     let grid = read_heightmap(&path).map_err(|e| loc.at(&format!("{p}.file"), e.to_string()))?;
+    // every height (the file's values times the vertical scale) within bounds
+    let max_abs = grid.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let top = max_abs * vertical;
+    if !(top.is_finite() && top <= crate::scenario::validate::MAX_WORLD_M) {
+        return Err(loc.at(
+            &format!("{p}.file"),
+            format!(
+                "heights up to {top:e} m (the file's largest |value| {max_abs:e} × vertical_scale_m {vertical:e}) \
+             are beyond ±{:e} m",
+                crate::scenario::validate::MAX_WORLD_M
+            ),
+        ));
+    }
     let size = [
         (grid.nx - 1) as f64 * spacing,
         (grid.ny - 1) as f64 * spacing,

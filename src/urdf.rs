@@ -35,6 +35,9 @@ use quadsim_engine::model::{BaseKind, Model, ModelError};
 use quadsim_engine::spatial::{Transform, rot_from_rpy};
 use thiserror::Error;
 
+/// The most `<link>` (and the most `<joint>`) elements a URDF may have.
+pub const MAX_URDF_ELEMENTS: usize = 1000;
+
 /// Options of [`load_urdf`].
 #[derive(Clone, Debug, Default)]
 pub struct UrdfOptions {
@@ -138,10 +141,12 @@ pub enum UrdfError {
 /// [`UrdfError`] naming the file, element and field; never panics on bad input.
 pub fn load_urdf(path: &Path, opts: &UrdfOptions) -> Result<UrdfRobot, UrdfError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let text = crate::limits::read_text_capped(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(
+        |source| UrdfError::Io {
+            file: file.clone(),
+            source,
+        },
+    )?;
     let base_dir = path.parent().unwrap_or(Path::new("."));
     parse_urdf(&text, &file, base_dir, opts)
 }
@@ -243,10 +248,12 @@ pub fn parse_urdf(
         desc.links.push(link);
     }
 
+    let link_names: std::collections::HashSet<&str> =
+        robot.links.iter().map(|l| l.name.as_str()).collect();
     for j in &robot.joints {
         let el = label("joint", &j.name);
         for (role, link) in [("parent", &j.parent.link), ("child", &j.child.link)] {
-            if !robot.links.iter().any(|l| &l.name == link) {
+            if !link_names.contains(link.as_str()) {
                 return Err(UrdfError::UnknownLink {
                     file: file.to_string(),
                     element: el,
@@ -347,6 +354,10 @@ pub fn parse_urdf(
         file: file.to_string(),
         source,
     })?;
+    // Physical bounds (masses, inertias, lengths, shapes), as `check` and
+    // `run` apply them to every robot, reported against the file's line.
+    crate::physical::check_description(&desc)
+        .map_err(|e| invalid(label(e.kind, &e.name), &e.field, e.why))?;
     Ok(UrdfRobot {
         description: desc,
         warnings,
@@ -521,6 +532,18 @@ fn precheck(doc: &roxmltree::Document<'_>, file: &str) -> Result<Facts, UrdfErro
         .and_then(|v| v.trim().split_once('.'))
         .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)))
         .unwrap_or((1, 0));
+    // A size limit first, before any per-element work (a robot has tens of
+    // links; a 5,000-joint chain is refused here at once).
+    for tag in ["link", "joint"] {
+        let n = children(root, tag).count();
+        if n > MAX_URDF_ELEMENTS {
+            return Err(invalid(
+                &format!("<robot> (line {})", line(root)),
+                format!("<{tag}>"),
+                format!("{n} <{tag}> elements, more than the {MAX_URDF_ELEMENTS} quadsim imports"),
+            ));
+        }
+    }
     let mut facts = Facts::default();
     // `path` is the field as shown in messages, e.g. "<inertial><mass value>".
     let check_nums = |el: &str,

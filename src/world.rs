@@ -85,6 +85,74 @@ impl Overrides {
     }
 }
 
+/// A time step below this is legal but suspect (s).
+pub const SUSPECT_DT_S: f64 = 1.0e-5;
+/// More steps than this in one run are legal but suspect.
+pub const SUSPECT_STEPS: u64 = 100_000_000;
+/// A friction coefficient above this is legal but suspect.
+pub const SUSPECT_FRICTION: f64 = 2.0;
+/// A commanded speed above this is legal but suspect (m/s).
+pub const SUSPECT_SPEED_MPS: f64 = 5.0;
+
+/// Warnings for values that are legal but suspect, with the numbers that
+/// make them so (`check` and `run` print them).
+fn suspect_values(scn: &Scenario, steps: u64) -> Vec<String> {
+    use crate::scenario::format::GroundSpec;
+    let f = &scn.file;
+    let w = &f.world;
+    let mut out = Vec::new();
+    if w.dt_s < SUSPECT_DT_S {
+        out.push(format!(
+            "world.dt_s = {} s is below {SUSPECT_DT_S} s: {:.3e} steps per simulated second, \
+             far finer than contact needs (0.0005 s is the default)",
+            w.dt_s,
+            1.0 / w.dt_s
+        ));
+    }
+    if steps > SUSPECT_STEPS {
+        out.push(format!(
+            "the run takes {steps} steps (more than {SUSPECT_STEPS}): hours of wall time"
+        ));
+    }
+    let mut grounds: Vec<(String, &GroundSpec)> = Vec::new();
+    if let Some(g) = &w.default_ground {
+        grounds.push(("world.default_ground".into(), g));
+    }
+    for (i, t) in f.terrains.iter().enumerate() {
+        if let Some(g) = &t.ground {
+            grounds.push((format!("terrains[{i}].ground"), g));
+        }
+    }
+    for (p, g) in grounds {
+        if let GroundSpec::Custom(c) = g
+            && c.friction > SUSPECT_FRICTION
+        {
+            out.push(format!(
+                "{p}.friction = {} is above {SUSPECT_FRICTION}: rubber on concrete is about 1",
+                c.friction
+            ));
+        }
+    }
+    for (i, r) in f.robots.iter().enumerate() {
+        for key in ["v_x_mps", "v_y_mps"] {
+            if let Some(v) = r.controller.params.get(key).and_then(as_f64)
+                && v.abs() > SUSPECT_SPEED_MPS
+            {
+                out.push(format!(
+                    "{}.controller.{key} = {v} m/s is above {SUSPECT_SPEED_MPS} m/s: faster than \
+             quadsim's walkers go",
+                    f.robot_key_path(i)
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// The most feet a robot may have (a quadruped's; a URDF whose legs end in
+/// extra toe or sensor links names its four feet with `feet`).
+pub const MAX_FEET: usize = 4;
+
 /// Builds the world. Errors name the scenario file, line and key path (for a
 /// herd robot's varied value, its `vary` entry).
 pub fn build_world(scn: &Scenario, ov: Overrides) -> Result<World, ScenarioError> {
@@ -158,12 +226,44 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
             desc.feet = feet.clone();
         }
         desc.name = r.name.clone();
+        // the bounds `check` and `run` share (a URDF's were checked, with
+        // its lines, on import; a built-in's parameters are checked here)
+        crate::physical::check_description(&desc).map_err(|e| {
+            let prefix = format!("{}.", e.name);
+            let key = match r.params.keys().find(|k| k.starts_with(&prefix)) {
+                Some(k) => format!("params.{}", path_key(k)),
+                None if r.params.is_empty() => "model".to_string(),
+                None => "params".to_string(),
+            };
+            loc.at(&format!("{p}.{key}"), format!("'{}': {e}", r.model))
+        })?;
         let model = Model::from_description(&desc, BaseKind::Floating)
             .map_err(|e| loc.at(&format!("{p}.model"), format!("'{}': {e}", r.model)))?;
         if model.feet.is_empty() {
             return Err(loc.at(
                 &format!("{p}.model"),
                 "the robot has no feet (no leaf links); name them with `feet`",
+            ));
+        }
+        if model.feet.len() > MAX_FEET {
+            let names: Vec<&str> = model
+                .feet
+                .iter()
+                .map(|&f| model.frames[f].name.as_str())
+                .collect();
+            let (key, how) = if r.feet.is_some() {
+                ("feet", "name at most four")
+            } else {
+                ("model", "name the four feet with `feet`")
+            };
+            return Err(loc.at(
+                &format!("{p}.{key}"),
+                format!(
+                    "'{}' has {} feet ({}): quadsim's sensors, controllers and metrics take at most {MAX_FEET}; {how}",
+                    r.model,
+                    names.len(),
+                    names.join(", ")
+                ),
             ));
         }
         let nj = model.nv - 6;
@@ -401,7 +501,20 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
         robots_out.push((r.name.clone(), root));
     }
     sim.compile();
-    let steps = (ov.duration_s.unwrap_or(w.duration_s) / w.dt_s).round() as u64;
+    let steps_f = (ov.duration_s.unwrap_or(w.duration_s) / w.dt_s).round();
+    if steps_f > crate::limits::MAX_STEPS as f64 {
+        return Err(loc.at(
+            "",
+            format!(
+                "--duration {} s at dt {} s is {steps_f:.3e} steps, beyond the {} a run may take",
+                ov.duration_s.unwrap_or(w.duration_s),
+                w.dt_s,
+                crate::limits::MAX_STEPS
+            ),
+        ));
+    }
+    let steps = steps_f as u64;
+    warnings.extend(suspect_values(scn, steps));
     Ok(World {
         sim,
         robots: robots_out,

@@ -338,3 +338,37 @@ fn monitor_cli_prints_frames_and_times_out_on_a_missing_world() {
     assert!(start.elapsed() < Duration::from_secs(10));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn monitor_ends_quietly_when_its_reader_goes_away() {
+    // `quadsim monitor … | head -1`: stdout closes after one line; the
+    // monitor stops at its next line with exit 0, not a broken-pipe panic
+    use std::io::BufRead;
+    let out = tmp("pipe");
+    let world = world_name("pipe");
+    let mut child = spawn_run(
+        "trot.toml",
+        &out,
+        1000.0,
+        &["--world-name", &world, "--no-log"],
+    );
+    let _ = open(&world, &mut child);
+    let mut mon = quadsim()
+        .args(["monitor", "--world", &world, "--frames", "100000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    {
+        let mut r = std::io::BufReader::new(mon.stdout.take().unwrap());
+        r.read_line(&mut first).unwrap();
+    } // the read end closes here, as `head -1` exits
+    let o = mon.wait_with_output().unwrap();
+    stop(child);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(first.starts_with("rex tick="), "{first}");
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}

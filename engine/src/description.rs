@@ -306,10 +306,15 @@ impl RobotDescription {
         if !self.feet.is_empty() {
             return self.feet.clone();
         }
+        // sets, not scans: a long chain is linear (issue 29)
+        let parents: std::collections::HashSet<&str> =
+            self.joints.iter().map(|j| j.parent.as_str()).collect();
+        let children: std::collections::HashSet<&str> =
+            self.joints.iter().map(|j| j.child.as_str()).collect();
         self.links
             .iter()
-            .filter(|l| !self.joints.iter().any(|j| j.parent == l.name))
-            .filter(|l| self.joints.iter().any(|j| j.child == l.name))
+            .filter(|l| !parents.contains(l.name.as_str()))
+            .filter(|l| children.contains(l.name.as_str()))
             .map(|l| l.name.clone())
             .collect()
     }

@@ -537,9 +537,8 @@ fn acceleration<F: ForceModel>(
 /// [`ImposedJoints`]). Computes the mass matrix; leaves `data.tau` with
 /// `RNEA(q, v, [0; a_j], f_ext)`.
 ///
-/// # Panics
 /// When the base's composite inertia is not positive definite (a massless
-/// robot).
+/// robot) the accelerations are NaN, which the divergence check catches.
 pub fn hybrid_acceleration(
     model: &Model,
     data: &mut Data,
@@ -560,10 +559,14 @@ pub fn hybrid_acceleration(
             }
             rhs[k] = tau[k] - data.tau[k];
         }
-        assert!(
-            cholesky_in_place(&mut mbb),
-            "hybrid dynamics: the base's composite inertia is singular"
-        );
+        if !cholesky_in_place(&mut mbb) {
+            // A singular composite inertia (a massless or non-physical
+            // robot): no acceleration exists. NaN accelerations make the
+            // state not finite, which the divergence check reports as this
+            // robot's failure instead of ending the process.
+            a.fill(f64::NAN);
+            return;
+        }
         cholesky_solve_in_place(&mbb, &mut rhs);
         a[..6].copy_from_slice(&rhs);
         for j in 6..nv {

@@ -182,8 +182,8 @@ pub fn run(a: DynamicsArgs) -> Result<(), CliError> {
     let model = Model::from_description(&desc, base)
         .map_err(|e| bad(format!("model '{}': {e}", a.model)))?;
     let file = a.states.display().to_string();
-    let text =
-        std::fs::read_to_string(&a.states).map_err(|e| bad(format!("{file}: cannot read: {e}")))?;
+    let text = crate::limits::read_text_capped(&a.states, crate::limits::MAX_TEXT_FILE_BYTES)
+        .map_err(|e| bad(format!("{file}: cannot read: {e}")))?;
     let states = parse_states(&text, model.nv).map_err(|e| bad(format!("{file}: {e}")))?;
     let mut data = Data::new(&model);
     let mut results = Vec::with_capacity(states.len());

@@ -53,6 +53,22 @@ pub fn plain_line(name: &str, f: &RobotFrame) -> String {
     )
 }
 
+/// Writes one line to stdout and flushes it; `Ok(false)` when stdout is
+/// closed (a broken pipe, as after `| head -1`), where Unix tools stop
+/// quietly, instead of `println!`'s panic.
+pub fn print_line(line: &str) -> Result<bool, CliError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{line}").and_then(|()| out.flush()) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(false),
+        Err(e) => Err(CliError::Io {
+            path: "stdout".into(),
+            source: e,
+        }),
+    }
+}
+
 /// Runs `quadsim monitor`.
 pub fn run(a: MonitorArgs) -> Result<(), CliError> {
     if !(a.timeout.is_finite() && a.timeout >= 0.0) {
@@ -64,7 +80,9 @@ pub fn run(a: MonitorArgs) -> Result<(), CliError> {
     let timeout = Duration::from_secs_f64(a.timeout);
     if a.list {
         for w in list_worlds().map_err(monitor_error)? {
-            println!("{w}");
+            if !print_line(&w)? {
+                return Ok(());
+            }
         }
         return Ok(());
     }
@@ -102,7 +120,10 @@ pub fn run(a: MonitorArgs) -> Result<(), CliError> {
     };
     if a.frames.is_none() && std::io::IsTerminal::is_terminal(&std::io::stdout()) {
         let mut board = super::dashboard::Dashboard::new(&world, names, only);
-        let mut term = ratatui::init();
+        let mut term = ratatui::try_init().map_err(|e| CliError::Io {
+            path: "terminal".into(),
+            source: e,
+        })?;
         let res = live(&mut term, &mut reader, &mut board, timeout);
         ratatui::restore();
         return res;
@@ -122,7 +143,10 @@ pub fn run(a: MonitorArgs) -> Result<(), CliError> {
                 continue;
             }
             let name = names.get(i).map_or("?", String::as_str);
-            println!("{}", plain_line(name, f));
+            if !print_line(&plain_line(name, f))? {
+                // the reader went away (`| head -1`): a quiet, successful end
+                return Ok(());
+            }
         }
         printed += 1;
     }

@@ -30,6 +30,7 @@ pub fn run(a: OptimizeArgs) -> Result<(), CliError> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("runs").join(&opt.name));
+    crate::study::output::prepare_out_dir(&out)?;
     let bar = if a.quiet {
         indicatif::ProgressBar::hidden()
     } else {

@@ -344,7 +344,25 @@ pub fn run(a: ReplayArgs) -> Result<(), CliError> {
         );
         return Ok(());
     }
-    let mut term = ratatui::init();
+    // No terminal (a script, `</dev/null`, a pipe): the last frame as plain text.
+    if !std::io::IsTerminal::is_terminal(&std::io::stdin())
+        || !std::io::IsTerminal::is_terminal(&std::io::stdout())
+    {
+        eprintln!(
+            "replay: not a terminal; printing the last frame as text (--headless-frames N for more)"
+        );
+        let text = headless(&r, 1, a.headless_size[0], a.headless_size[1]);
+        for line in text.lines() {
+            if !super::monitor::print_line(line)? {
+                break;
+            }
+        }
+        return Ok(());
+    }
+    let mut term = ratatui::try_init().map_err(|e| CliError::Io {
+        path: "terminal".into(),
+        source: e,
+    })?;
     let res = play(&mut term, &r, a.speed);
     ratatui::restore();
     res.map_err(|e| CliError::Io {

@@ -99,10 +99,14 @@ fn overrides(a: &RunArgs) -> Result<Overrides, CliError> {
             "--duration: must be a finite time > 0 (s), got {d}"
         )));
     }
+    let (threads, note) = crate::limits::capped_threads(a.threads);
+    if let Some(n) = note {
+        eprintln!("note: {n}");
+    }
     Ok(Overrides {
         duration_s: a.duration,
         seed: a.seed,
-        threads: a.threads,
+        threads,
     })
 }
 
@@ -119,11 +123,14 @@ pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
     if let Some(d) = ground.default_ground() {
         materials.push(("world.default_ground".into(), d.material));
     }
+    // the union holds the patches sorted by terrain name (systems' ground
+    // compile), not in file order
+    let mut names: Vec<&str> = scn.file.terrains.iter().map(|t| t.name.as_str()).collect();
+    names.sort_unstable();
     for (i, p) in ground.patches().iter().enumerate() {
-        let name = scn.file.terrains.get(i).map_or_else(
-            || format!("terrain {i}"),
-            |t| format!("terrain '{}'", t.name),
-        );
+        let name = names
+            .get(i)
+            .map_or_else(|| format!("terrain {i}"), |t| format!("terrain '{t}'"));
         materials.push((name, *p.material()));
     }
     let dt = scn.file.world.dt_s;
@@ -177,10 +184,14 @@ pub fn stability_warnings(scn: &Scenario, world: &World) -> Vec<String> {
 
 /// Runs `quadsim check`.
 pub fn check(a: CheckArgs) -> Result<(), CliError> {
-    if let Some(kind) = std::fs::read_to_string(&a.scenario)
-        .ok()
-        .and_then(|s| crate::study::file_kind(&s))
-    {
+    let text = crate::limits::read_text_capped(&a.scenario, crate::limits::MAX_TEXT_FILE_BYTES)
+        .map_err(|e| {
+            bad(format!(
+                "{}: cannot read the scenario: {e}",
+                a.scenario.display()
+            ))
+        })?;
+    if let Some(kind) = Some(text).and_then(|s| crate::study::file_kind(&s)) {
         if kind == "optimize" {
             let opt =
                 crate::study::optimize::load_optimization(&a.scenario).map_err(scenario_error)?;
@@ -555,7 +566,11 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
                 let k = world.sim.run_pass(max);
                 left -= k;
                 done += k;
-                if let Err(e) = check_finite(&world) {
+                // A diverged robot is no longer stepped and the others go
+                // on; the run stops early only when every robot diverged.
+                if all_diverged(&world)
+                    && let Err(e) = check_finite(&world)
+                {
                     outcome.diverged = Some(e.to_string());
                     return true;
                 }
@@ -583,7 +598,17 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         return Err(bad(e));
     }
     let mut summary = summary_json(&scn, &world, wall, a.threads);
-    if let Some(d) = &outcome.diverged {
+    // Some robots diverged and the others ran to the end: each diverged
+    // robot's entry says when and why (`robot_json`), and the run's error
+    // names the first.
+    let partly_diverged = match (&outcome.diverged, check_finite(&world)) {
+        (None, Err(e)) => Some(format!(
+            "{e}; the other {} robot(s) ran to the end",
+            world.robots.len() - diverged_count(&world)
+        )),
+        _ => None,
+    };
+    if let Some(d) = outcome.diverged.as_ref().or(partly_diverged.as_ref()) {
         // What was computed up to the divergence is kept: the summary (and
         // the report) cover the run until then; the error follows below.
         summary["diverged"] = json!(d);
@@ -619,7 +644,7 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
             log_stats.is_some(),
         )?)
     };
-    if let Some(d) = outcome.diverged {
+    if let Some(d) = outcome.diverged.or(partly_diverged) {
         return Err(CliError::Diverged(d));
     }
     Ok(RunOutput {
@@ -719,14 +744,103 @@ pub fn report_error(e: crate::report::ReportError) -> CliError {
 /// the error names the step it happened at, also after a pass of several
 /// steps ([`quadsim_systems::Simulation::run_pass`]).
 pub fn check_finite(world: &World) -> Result<(), CliError> {
-    use quadsim_engine::divergence::Divergence;
     for (name, root) in &world.robots {
         let Some(r) = world.sim.robot(*root) else {
             continue;
         };
-        let Some((t, d)) = r.run.diverged else {
-            continue;
-        };
+        if let Some((t, what, cause)) = divergence_of(world, r) {
+            return Err(CliError::Diverged(format!(
+                "robot '{name}' diverged at t = {t:.4} s: {what} ({cause})"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether every robot has diverged (and so the run can stop).
+pub fn all_diverged(world: &World) -> bool {
+    diverged_count(world) == world.robots.len()
+}
+
+/// How many robots have diverged.
+pub fn diverged_count(world: &World) -> usize {
+    world
+        .robots
+        .iter()
+        .filter(|(_, root)| {
+            world
+                .sim
+                .robot(*root)
+                .is_some_and(|r| r.run.diverged.is_some())
+        })
+        .count()
+}
+
+/// Share of the run a joint may spend at its torque limit before a
+/// divergence is put down to saturated actuators.
+const SATURATION_CAUSE_SHARE: f64 = 0.2;
+
+/// The likely cause of a robot's divergence, from the numbers: a contact
+/// too stiff for the time step (the stability limit), a fall followed by a
+/// joint spinning free on an ideal torque source, saturated actuators, or
+/// none of these.
+pub fn divergence_cause(
+    world: &World,
+    r: &quadsim_components::RobotSim,
+    d: &quadsim_engine::divergence::Divergence,
+) -> String {
+    use quadsim_engine::contact::stability::check_stability_split;
+    use quadsim_engine::divergence::Divergence;
+    let ground = crate::world::ground_of(world);
+    let mut materials = Vec::new();
+    if let Some(g) = ground.default_ground() {
+        materials.push(g.material);
+    }
+    materials.extend(ground.patches().iter().map(|p| *p.material()));
+    let per_foot = r.model.total_mass / r.run.n_feet.max(1) as f64;
+    let unstable = materials
+        .iter()
+        .flat_map(|m| check_stability_split(m, world.dt_s, per_foot, per_foot))
+        .next();
+    let m = r.run.metrics.summary();
+    let a = r.run.actuators.summary();
+    let joint_speed = matches!(d, Divergence::Speed { index, .. } if *index >= r.model.base_nv());
+    if let Some(w) = unstable {
+        format!(
+            "likely cause: the ground contact is unstable at this time step ({w}); \
+             a smaller world.dt_s or a softer ground"
+        )
+    } else if let (Some(t), true) = (m.fell_at_s, joint_speed) {
+        format!(
+            "likely cause: the robot fell at t = {t:.3} s and a joint then spun up without \
+             a speed limit (an ideal torque source); give its joints motors ([robots.actuators])              or velocity limits"
+        )
+    } else if a.max_time_share_at_torque_limit > SATURATION_CAUSE_SHARE {
+        format!(
+            "likely cause: actuators saturated ({:.0} % of the run at a torque limit); \
+             the controller's demands exceed the joints' ratings",
+            100.0 * a.max_time_share_at_torque_limit
+        )
+    } else if let Some(t) = m.fell_at_s {
+        format!(
+            "the robot fell at t = {t:.3} s; no unstable contact or saturation was found: \
+             check the model's masses and inertias, or try the rk4 integrator"
+        )
+    } else {
+        "no unstable contact, fall or saturation was found: check the model's masses and \
+             inertias and the controller's gains, or try a smaller world.dt_s or the rk4 integrator"
+            .to_string()
+    }
+}
+
+/// A diverged robot's time, what diverged and the likely cause.
+pub fn divergence_of(
+    world: &World,
+    r: &quadsim_components::RobotSim,
+) -> Option<(f64, String, String)> {
+    use quadsim_engine::divergence::Divergence;
+    {
+        let (t, d) = r.run.diverged?;
         let m = &r.model;
         let (nq0, nv0) = (m.base_nq(), m.base_nv());
         let joint = |vi: usize| m.joint_name[m.v_body[vi]].as_str();
@@ -763,11 +877,8 @@ pub fn check_finite(world: &World) -> Result<(), CliError> {
                 )
             }
         };
-        return Err(CliError::Diverged(format!(
-            "robot '{name}' diverged at t = {t:.4} s: {what} (try a smaller world.dt_s or the rk4 integrator)"
-        )));
+        Some((t, what, divergence_cause(world, r, &d)))
     }
-    Ok(())
 }
 
 /// What velocity coordinate `i` is.
@@ -958,13 +1069,28 @@ pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
     v
 }
 
+/// [`robot_json`], with `diverged` (`t_s`, `what`, `cause`) for a robot
+/// whose run ended in a divergence (the others ran on).
+pub fn robot_json_in(world: &World, name: &str, r: &quadsim_components::RobotSim) -> Value {
+    let mut v = robot_json(name, r);
+    if let Some((t, what, cause)) = divergence_of(world, r) {
+        v["diverged"] = json!({"t_s": t, "what": what, "cause": cause});
+    }
+    v
+}
+
 /// `summary.json`: deterministic fields, then `timing` (the only wall-clock part).
 pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: usize) -> Value {
     let clock = world.sim.clock();
     let robots: Vec<Value> = world
         .robots
         .iter()
-        .filter_map(|(name, root)| world.sim.robot(*root).map(|r| robot_json(name, r)))
+        .filter_map(|(name, root)| {
+            world
+                .sim
+                .robot(*root)
+                .map(|r| robot_json_in(world, name, r))
+        })
         .collect();
     let sha = Sha256::digest(scn.source.as_bytes());
     let used_threads = world

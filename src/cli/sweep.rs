@@ -134,6 +134,7 @@ pub fn sweep(a: SweepArgs) -> Result<(), CliError> {
             None => d,
         }
     });
+    crate::study::output::prepare_out_dir(&out)?;
     let jobs = if a.jobs == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {

@@ -175,7 +175,7 @@ impl RunLog {
         let t_ns = step_time_ns(clock.step, world.dt_s);
         for (name, root) in &world.robots {
             if let Some(r) = world.sim.robot(*root) {
-                let m = crate::cli::run::robot_json(name, r);
+                let m = crate::cli::run::robot_json_in(world, name, r);
                 self.log
                     .write_json(&metrics_topic(name), Schema::RobotMetrics, t_ns, &m);
             }

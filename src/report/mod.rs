@@ -78,8 +78,17 @@ pub fn robot_info(scenario_text: &str, name: &str) -> RobotInfo {
             a.iter()
                 .find(|r| r.get("name").and_then(|n| n.as_str()) == Some(name))
         });
-    let Some(robot) = robot else {
-        return RobotInfo::default();
+    // a herd's robot is not in `robots`: take it from the expanded herds
+    let herd_robot;
+    let robot = match robot {
+        Some(r) => r,
+        None => match herd_robot_table(scenario_text, name) {
+            Some(t) => {
+                herd_robot = toml::Value::Table(t);
+                &herd_robot
+            }
+            None => return RobotInfo::default(),
+        },
     };
     let ctrl = robot.get("controller");
     let kind = ctrl
@@ -113,6 +122,46 @@ pub fn robot_info(scenario_text: &str, name: &str) -> RobotInfo {
         controller: kind,
         speed_command: speed,
     }
+}
+
+/// The model and controller of a herd's robot, from the scenario's herds
+/// expanded once per scenario text (a report asks for every robot of a
+/// herd of thousands).
+fn herd_robot_table(scenario_text: &str, name: &str) -> Option<toml::Table> {
+    use std::collections::HashMap;
+    use std::sync::{Arc, Mutex};
+    type Expanded = Arc<HashMap<String, toml::Table>>;
+    static CACHE: Mutex<Option<(String, Expanded)>> = Mutex::new(None);
+    let expanded = {
+        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        match cache.as_ref() {
+            Some((text, e)) if text == scenario_text => e.clone(),
+            _ => {
+                let mut map = HashMap::new();
+                let mut file: crate::scenario::ScenarioFile = toml::from_str(scenario_text).ok()?;
+                let path = std::path::Path::new("scenario.toml");
+                let loc = crate::scenario::Locator {
+                    path,
+                    src: scenario_text,
+                };
+                crate::scenario::herd::expand(&loc, &mut file).ok()?;
+                for r in file.robots {
+                    let mut t = toml::Table::new();
+                    t.insert("model".into(), toml::Value::String(r.model));
+                    let mut c: toml::Table = r.controller.params.into_iter().collect();
+                    if let Some(k) = r.controller.kind {
+                        c.insert("kind".into(), toml::Value::String(k));
+                    }
+                    t.insert("controller".into(), toml::Value::Table(c));
+                    map.insert(r.name, t);
+                }
+                let e = Arc::new(map);
+                *cache = Some((scenario_text.to_string(), e.clone()));
+                e
+            }
+        }
+    };
+    expanded.get(name).cloned()
 }
 
 /// Whether the report needs a topic's messages (not the 3D scene and
@@ -178,7 +227,7 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
             }
             let links = figs
                 .iter()
-                .map(|(caption, f)| (caption.clone(), f.stem.clone()))
+                .map(|(caption, f)| (caption.clone(), crate::names::safe_file_stem(&f.stem)))
                 .collect();
             figures.push((name.clone(), links));
         }

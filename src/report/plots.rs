@@ -266,12 +266,17 @@ fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, f: &Figure) -> 
 pub fn write_figure(f: &Figure, dir: &Path) -> Result<[PathBuf; 2], ReportError> {
     register_fonts();
     let (w, h) = PLOT_SIZE;
-    let svg_path = dir.join(format!("{}.svg", f.stem));
-    let png_path = dir.join(format!("{}.png", f.stem));
     let fail = |p: &Path, m: String| ReportError {
         path: p.display().to_string(),
         message: m,
     };
+    // the stem holds a robot's name: made safe, and the files checked to
+    // lie in `dir` (crate::names)
+    let stem = crate::names::safe_file_stem(&f.stem);
+    let inside = |ext: &str| {
+        crate::names::join_inside(dir, &format!("{stem}.{ext}")).map_err(|m| fail(dir, m))
+    };
+    let (svg_path, png_path) = (inside("svg")?, inside("png")?);
     let mut svg = String::new();
     draw_figure(
         SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area(),

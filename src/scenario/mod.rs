@@ -92,13 +92,16 @@ impl Locator<'_> {
 
 /// Reads, parses and validates a scenario file.
 pub fn load_scenario(path: &Path) -> Result<Scenario, ScenarioError> {
-    let src = std::fs::read_to_string(path).map_err(|e| ScenarioError {
-        file: path.to_path_buf(),
-        line: 0,
-        column: 0,
-        key_path: String::new(),
-        message: format!("cannot read the scenario: {e}"),
-    })?;
+    let src =
+        crate::limits::read_text_capped(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|e| {
+            ScenarioError {
+                file: path.to_path_buf(),
+                line: 0,
+                column: 0,
+                key_path: String::new(),
+                message: format!("cannot read the scenario: {e}"),
+            }
+        })?;
     parse_scenario(path, src)
 }
 
@@ -124,9 +127,10 @@ pub fn parse_scenario(path: &Path, src: String) -> Result<Scenario, ScenarioErro
         toml::from_str(&src).map_err(|e| loc.at_span(e.span(), e.message().trim().to_string()))?;
     herd::expand(&loc, &mut file)?;
     validate::validate(&loc, &file).map_err(|e| herd::relocate(&loc, &file, e))?;
+    // world.name was checked; a file stem is made safe to name a directory
     let name = file.world.name.clone().unwrap_or_else(|| {
         path.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
+            .map(|s| crate::names::safe_file_stem(&s.to_string_lossy()))
             .unwrap_or_else(|| "scenario".into())
     });
     Ok(Scenario {

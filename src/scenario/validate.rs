@@ -170,12 +170,22 @@ pub const EVENT_KINDS: &[(&str, &[KeySpec])] = &[
     ("detach", &[("payload", Domain::Text, true)]),
 ];
 
+/// The stiffest ground (N/m, or the Hunt–Crossley k).
+pub const MAX_STIFFNESS_N_PER_M: f64 = 1.0e12;
+/// The most damped ground (N·s/m).
+pub const MAX_DAMPING_NS_PER_M: f64 = 1.0e9;
+/// The largest friction coefficient.
+pub const MAX_FRICTION: f64 = 100.0;
+
 /// The ground presets of Study A.
 pub const GROUND_PRESETS: &[&str] = &["concrete", "grass", "mud", "sand"];
 
 /// Validates a parsed scenario.
 pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError> {
     let w = &f.world;
+    if let Some(n) = &w.name {
+        name(loc, "world.name", n)?;
+    }
     positive(loc, "world.dt_s", w.dt_s)?;
     if w.dt_s > 0.01 {
         return Err(loc.at(
@@ -187,6 +197,18 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
         ));
     }
     positive(loc, "world.duration_s", w.duration_s)?;
+    let steps = w.duration_s / w.dt_s;
+    if steps > crate::limits::MAX_STEPS as f64 {
+        return Err(loc.at(
+            "world.duration_s",
+            format!(
+                "{} s at dt {} s is {steps:.3e} steps, beyond the {} a run may take",
+                w.duration_s,
+                w.dt_s,
+                crate::limits::MAX_STEPS
+            ),
+        ));
+    }
     positive(loc, "world.controller_rate_hz", w.controller_rate_hz)?;
     let ratio = 1.0 / (w.dt_s * w.controller_rate_hz);
     if ratio < 1.0 - 1e-9 || (ratio - ratio.round()).abs() > 1e-6 {
@@ -206,9 +228,15 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
     if w.gravity_mps2.iter().any(|g| !g.is_finite()) {
         return Err(loc.at("world.gravity_mps2", "must be three finite numbers (m/s²)"));
     }
+    bounded_all(loc, "world.gravity_mps2", &w.gravity_mps2)?;
     if !w.default_ground_height_m.is_finite() {
         return Err(loc.at("world.default_ground_height_m", "must be finite (m)"));
     }
+    bounded(
+        loc,
+        "world.default_ground_height_m",
+        w.default_ground_height_m,
+    )?;
     if let Some(g) = &w.default_ground {
         ground(loc, "world.default_ground", g)?;
     }
@@ -216,6 +244,7 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
     let mut terrain_names: Vec<&str> = Vec::new();
     for (i, t) in f.terrains.iter().enumerate() {
         let p = format!("terrains[{i}]");
+        name(loc, &format!("{p}.name"), &t.name)?;
         if terrain_names.contains(&t.name.as_str()) {
             return Err(loc.at(
                 &format!("{p}.name"),
@@ -226,12 +255,14 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
         if t.origin_m.iter().any(|x| !x.is_finite()) {
             return Err(loc.at(&format!("{p}.origin_m"), "must be three finite numbers (m)"));
         }
+        bounded_all(loc, &format!("{p}.origin_m"), &t.origin_m)?;
         if let Some(e) = t.extent_m {
             for x in e {
                 if !(x.is_finite() && x > 0.0) {
                     return Err(loc.at(&format!("{p}.extent_m"), "must be two positive sizes (m)"));
                 }
             }
+            bounded_all(loc, &format!("{p}.extent_m"), &e)?;
         }
         if let Some(g) = &t.ground {
             ground(loc, &format!("{p}.ground"), g)?;
@@ -240,37 +271,46 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
     }
 
     let mut robot_names: Vec<&str> = Vec::new();
+    // a set beside the list: a herd of thousands is checked in linear time
+    let mut robot_set = std::collections::HashSet::new();
     for (i, r) in f.robots.iter().enumerate() {
         let p = f.robot_key_path(i);
-        if r.name.is_empty() {
-            return Err(loc.at(&format!("{p}.name"), "must not be empty"));
-        }
-        if robot_names.contains(&r.name.as_str()) {
+        name(loc, &format!("{p}.name"), &r.name)?;
+        if !robot_set.insert(r.name.as_str()) {
             return Err(loc.at(
                 &format!("{p}.name"),
                 format!("duplicate robot name '{}'", r.name),
             ));
         }
         robot_names.push(&r.name);
+        for (k, pl) in r.payloads.iter().enumerate() {
+            name(loc, &format!("{p}.payloads[{k}].name"), &pl.name)?;
+        }
         if let Some(rate) = &r.log.rate_hz {
             rate.every_steps(w.dt_s)
                 .map_err(|m| loc.at(&format!("{p}.log.rate_hz"), m))?;
         }
         for (k, v) in &r.params {
+            let kp = format!("{p}.params.{}", path_key(k));
             if !v.is_finite() {
+                return Err(loc.at(&kp, "must be a finite number"));
+            }
+            bounded(loc, &kp, *v)?;
+        }
+        if let Some(sp) = r.start_position_m {
+            if sp.iter().any(|x| !x.is_finite()) {
                 return Err(loc.at(
-                    &format!("{p}.params.{}", path_key(k)),
-                    "must be a finite number",
+                    &format!("{p}.start_position_m"),
+                    "must be three finite numbers (m)",
                 ));
             }
+            bounded_all(loc, &format!("{p}.start_position_m"), &sp)?;
         }
-        if let Some(sp) = r.start_position_m
-            && sp.iter().any(|x| !x.is_finite())
-        {
-            return Err(loc.at(
-                &format!("{p}.start_position_m"),
-                "must be three finite numbers (m)",
-            ));
+        if let Some(xy) = r.start_xy_m {
+            if xy.iter().any(|x| !x.is_finite()) {
+                return Err(loc.at(&format!("{p}.start_xy_m"), "must be two finite numbers (m)"));
+            }
+            bounded_all(loc, &format!("{p}.start_xy_m"), &xy)?;
         }
         if !r.start_yaw_deg.is_finite() {
             return Err(loc.at(&format!("{p}.start_yaw_deg"), "must be finite (deg)"));
@@ -317,7 +357,8 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
         if !(e.t_s.is_finite() && e.t_s >= 0.0) {
             return Err(loc.at(&format!("{p}.t_s"), "must be a finite time ≥ 0 (s)"));
         }
-        if !robot_names.contains(&e.robot.as_str()) {
+        bounded(loc, &format!("{p}.t_s"), e.t_s)?;
+        if !robot_set.contains(e.robot.as_str()) {
             return Err(loc.at(
                 &format!("{p}.robot"),
                 format!(
@@ -392,6 +433,56 @@ fn list(names: &[&str]) -> String {
     }
 }
 
+/// The largest magnitude of a position, length or size in a scenario (m).
+pub const MAX_WORLD_M: f64 = 1.0e4;
+
+/// The documented bound on a numeric key's magnitude, from its unit suffix
+/// (scenarios/README.md, "Bounds"): lengths and positions 10 km, times
+/// 10⁷ s, speeds 100 m/s, rates 10⁶ Hz, angular speeds 1000 rad/s,
+/// forces 10⁷ N, masses 10⁵ kg, angles 10⁴ degrees, gains 10⁹; other numbers 10⁹.
+pub fn bound_of(key: &str) -> (f64, &'static str) {
+    let last = key.rsplit('.').next().unwrap_or(key);
+    let last = last.split('[').next().unwrap_or(last).trim_matches('"');
+    const TABLE: &[(&str, f64, &str)] = &[
+        ("_mps2", 1.0e3, "m/s²"),
+        ("_mps", 100.0, "m/s"),
+        ("_radps", 1.0e3, "rad/s"),
+        ("_hz", 1.0e6, "Hz"),
+        ("_kg", 1.0e5, "kg"),
+        ("_deg", 1.0e4, "°"),
+        ("_n", 1.0e7, "N"),
+        ("_s", 1.0e7, "s"),
+        ("_m", MAX_WORLD_M, "m"),
+    ];
+    for (suffix, b, unit) in TABLE {
+        if last.ends_with(suffix) {
+            return (*b, unit);
+        }
+    }
+    (1.0e9, "")
+}
+
+/// `x` within its key's documented bound ([`bound_of`]).
+pub fn bounded(loc: &Locator<'_>, path: &str, x: f64) -> Result<(), ScenarioError> {
+    let (b, unit) = bound_of(path);
+    if x.abs() > b {
+        return Err(loc.at(
+            path,
+            format!("{x:e} is beyond the bound ±{b:e} {unit} (scenarios/README.md, \"Bounds\")"),
+        ));
+    }
+    Ok(())
+}
+
+fn bounded_all(loc: &Locator<'_>, path: &str, xs: &[f64]) -> Result<(), ScenarioError> {
+    xs.iter().try_for_each(|x| bounded(loc, path, *x))
+}
+
+/// A name used in file names and channels: [`crate::names::check_name`].
+pub fn name(loc: &Locator<'_>, path: &str, n: &str) -> Result<(), ScenarioError> {
+    crate::names::check_name(n).map_err(|m| loc.at(path, m))
+}
+
 fn positive(loc: &Locator<'_>, path: &str, v: f64) -> Result<(), ScenarioError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
@@ -430,6 +521,24 @@ fn ground(loc: &Locator<'_>, path: &str, g: &GroundSpec) -> Result<(), ScenarioE
             if !(c.friction.is_finite() && c.friction >= 0.0) {
                 return Err(loc.at(&format!("{path}.friction"), "must be finite and ≥ 0"));
             }
+            for (k, v, max) in [
+                (
+                    "stiffness_n_per_m",
+                    c.stiffness_n_per_m,
+                    MAX_STIFFNESS_N_PER_M,
+                ),
+                ("damping_ns_per_m", c.damping_ns_per_m, MAX_DAMPING_NS_PER_M),
+                ("friction", c.friction, MAX_FRICTION),
+            ] {
+                if v > max {
+                    return Err(loc.at(
+                        &format!("{path}.{k}"),
+                        format!(
+                            "{v:e} is beyond the bound {max:e} (scenarios/README.md, \"Bounds\")"
+                        ),
+                    ));
+                }
+            }
             if let Some(law) = &c.law
                 && !["linear", "hunt_crossley", "hybrid"].contains(&law.as_str())
             {
@@ -439,12 +548,13 @@ fn ground(loc: &Locator<'_>, path: &str, g: &GroundSpec) -> Result<(), ScenarioE
                 ));
             }
             if let Some(n) = c.exponent
-                && !(n.is_finite() && n >= 1.0)
+                && !(n.is_finite() && (1.0..=4.0).contains(&n))
             {
-                return Err(loc.at(&format!("{path}.exponent"), "must be ≥ 1"));
+                return Err(loc.at(&format!("{path}.exponent"), "must be from 1 to 4"));
             }
             if let Some(d) = c.hybrid_depth_m {
                 positive(loc, &format!("{path}.hybrid_depth_m"), d)?;
+                bounded(loc, &format!("{path}.hybrid_depth_m"), d)?;
             }
             Ok(())
         }
@@ -525,7 +635,8 @@ fn check_domain(
             toml::Value::Array(a)
                 if a.len() == 3 && a.iter().all(|x| as_f64(x).is_some_and(f64::is_finite)) =>
             {
-                Ok(())
+                a.iter()
+                    .try_for_each(|x| bounded(loc, path, as_f64(x).unwrap_or(0.0)))
             }
             _ => bad("must be an array of three finite numbers"),
         },
@@ -534,7 +645,8 @@ fn check_domain(
                 if a.iter()
                     .all(|x| as_f64(x).is_some_and(|g| g.is_finite() && g >= 0.0))
                 {
-                    Ok(())
+                    a.iter()
+                        .try_for_each(|x| bounded(loc, path, as_f64(x).unwrap_or(0.0)))
                 } else {
                     bad("must be numbers ≥ 0")
                 }
@@ -556,7 +668,7 @@ fn check_domain(
                     _ => true,
                 };
             if ok {
-                Ok(())
+                bounded(loc, path, x)
             } else {
                 Err(loc.at(
                     path,

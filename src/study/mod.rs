@@ -105,12 +105,14 @@ pub fn file_kind(src: &str) -> Option<String> {
 
 /// A study file's text; an unreadable file is an error naming it.
 pub fn read_study_text(path: &Path) -> Result<String, ScenarioError> {
-    std::fs::read_to_string(path).map_err(|e| ScenarioError {
-        file: path.to_path_buf(),
-        line: 0,
-        column: 0,
-        key_path: String::new(),
-        message: format!("cannot read the study: {e}"),
+    crate::limits::read_text_capped(path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(|e| {
+        ScenarioError {
+            file: path.to_path_buf(),
+            line: 0,
+            column: 0,
+            key_path: String::new(),
+            message: format!("cannot read the study: {e}"),
+        }
     })
 }
 
@@ -122,12 +124,15 @@ pub fn read_base(
     base: &str,
 ) -> Result<(PathBuf, String, toml::Table), ScenarioError> {
     let base_path = study_path.parent().unwrap_or(Path::new(".")).join(base);
-    let base_source = std::fs::read_to_string(&base_path).map_err(|e| {
-        loc.at(
-            "base",
-            format!("cannot read the base scenario {}: {e}", base_path.display()),
-        )
-    })?;
+    let base_source =
+        crate::limits::read_text_capped(&base_path, crate::limits::MAX_TEXT_FILE_BYTES).map_err(
+            |e| {
+                loc.at(
+                    "base",
+                    format!("cannot read the base scenario {}: {e}", base_path.display()),
+                )
+            },
+        )?;
     parse_scenario(&base_path, base_source.clone())?;
     let table: toml::Table = toml::from_str(&base_source).expect("parsed above");
     Ok((base_path, base_source, table))
@@ -204,9 +209,12 @@ pub fn load_study(path: &Path) -> Result<Study, ScenarioError> {
         ));
     }
     let variants = sample::variants(&loc, &file.sweep, &vary)?;
+    if let Some(n) = &file.name {
+        crate::scenario::validate::name(&loc, "name", n)?;
+    }
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
+            .map(|s| crate::names::safe_file_stem(&s.to_string_lossy()))
             .unwrap_or_else(|| "study".into())
     });
     Ok(Study {

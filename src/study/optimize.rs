@@ -169,9 +169,12 @@ pub fn load_optimization(path: &Path) -> Result<Optimization, ScenarioError> {
             .map_err(|e| loc.at(&kp, format!("'{p}': {}", e.message_with_path())))?;
         params.push((p.clone(), b.min, b.max, start));
     }
+    if let Some(n) = &file.name {
+        crate::scenario::validate::name(&loc, "name", n)?;
+    }
     let name = file.name.clone().unwrap_or_else(|| {
         path.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
+            .map(|s| crate::names::safe_file_stem(&s.to_string_lossy()))
             .unwrap_or_else(|| "optimize".into())
     });
     Ok(Optimization {

@@ -260,7 +260,7 @@ fn write_plots(
             &plot_dir,
         )
         .map_err(|e| io(Path::new(&e.path), std::io::Error::other(e.message)))?;
-        out.push((path.clone(), stem));
+        out.push((path.clone(), crate::names::safe_file_stem(&stem)));
     }
     Ok(out)
 }
@@ -363,4 +363,25 @@ pub(crate) fn io(p: &Path, e: std::io::Error) -> CliError {
         path: p.display().to_string(),
         source: e,
     }
+}
+
+/// Makes sure results can be written to `dir` before anything runs: it is
+/// created (with its parents) if missing, must be a directory, and must take
+/// a file (a probe is written and removed). A study that would only find
+/// this out after its last simulation loses every result.
+///
+/// # Errors
+/// [`CliError::Io`] naming `dir` and why it cannot be used.
+pub fn prepare_out_dir(dir: &Path) -> Result<(), CliError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(io(
+            dir,
+            std::io::Error::other("--out: exists and is not a directory; nothing was run"),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let probe = dir.join(format!(".quadsim-write-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| io(dir, e))?;
+    std::fs::remove_file(&probe).map_err(|e| io(&probe, e))?;
+    Ok(())
 }

@@ -94,7 +94,11 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
         None => (&state.q[nq0..nq], &state.v[nv0..nv]),
     };
     match &s.suite.contacts {
-        Some(c) => s.contacts.copy_from_slice(&c.in_contact[..n_feet]),
+        Some(c) => {
+            // the sensors cover at most the first four feet
+            let n = n_feet.min(c.in_contact.len());
+            s.contacts[..n].copy_from_slice(&c.in_contact[..n]);
+        }
         None => {
             for (f, c) in s.foot_force_n.iter().zip(s.contacts.iter_mut()) {
                 *c = *f > 0.0;
