@@ -331,9 +331,33 @@ struct LegInfo {
     frame: usize,
     body: usize,
     point: DVec3,
+    /// Height (m) of `point` above the ground when the foot stands: 0 for a
+    /// described contact point, the sphere's radius when the point is a
+    /// foot sphere's centre (a URDF robot without `foot_points`).
+    standing_height_m: f64,
     qi: [usize; 4],
     vi: [usize; 4],
     dof: usize,
+}
+
+/// [`LegInfo::standing_height_m`] of foot `foot`.
+fn standing_height_m(desc: &RobotDescription, foot: &str) -> f64 {
+    if desc.foot_points.iter().any(|(n, _)| n == foot) {
+        return 0.0;
+    }
+    let placed = FootPoint::Contact.in_foot(desc, foot);
+    desc.link(foot)
+        .and_then(|l| {
+            l.collision.iter().find_map(|g| match g.shape {
+                crate::description::Shape::Sphere { radius_m }
+                    if (g.origin.trans - placed).length() < 1e-9 =>
+                {
+                    Some(radius_m)
+                }
+                _ => None,
+            })
+        })
+        .unwrap_or(0.0)
 }
 
 /// quad16's four legs in lanes for the leg IK, when `legs` are four quad16
@@ -456,6 +480,7 @@ impl Walker {
                     frame,
                     body: model.frames[frame].body,
                     point: FootPoint::Contact.in_foot(desc, &model.frames[frame].name),
+                    standing_height_m: standing_height_m(desc, &model.frames[frame].name),
                     qi,
                     vi,
                     dof: qv.len(),
@@ -735,6 +760,7 @@ impl Walker {
                 .terrain
                 .height(hip_world.x + o.x, hip_world.y + o.y)
                 .unwrap_or(self.feet_world[i].z);
+            let gz = gz + self.leg_info[i].standing_height_m;
             let target = foot_target_world(hip_world, yaw, gz, placement.offset_m);
             self.scheduler.set_touchdown_target(i, target);
         }
