@@ -151,3 +151,24 @@ fn bench_sensing_chooses_what_the_controller_reads() {
         }
     }
 }
+
+/// `--whole-body` benchmarks quad16 under the whole-body layer; without it
+/// the bench keeps Study A's `τ = Jᵀ f` (the performance history's figures).
+#[test]
+fn bench_whole_body_chooses_the_torque_layer() {
+    use quadsim::cli::bench::{BenchSensing, bench_scenario_with};
+    use quadsim::scenario::parse_scenario;
+    use quadsim::world::{Overrides, build_world};
+    use quadsim_components::Controller;
+    for whole_body in [false, true] {
+        let src = bench_scenario_with("quad16", 2, BenchSensing::Estimated, whole_body).unwrap();
+        let scn = parse_scenario(std::path::Path::new("bench.toml"), src).unwrap();
+        let w = build_world(&scn, Overrides::default()).unwrap();
+        for (name, e) in &w.robots {
+            let Controller::Walker(walker) = &w.sim.robot(*e).unwrap().run.controller else {
+                panic!("{name}: quad16 trots under the walker");
+            };
+            assert_eq!(walker.params.whole_body, whole_body, "{name}");
+        }
+    }
+}

@@ -63,6 +63,11 @@ pub struct BenchArgs {
     /// estimator, the "controller, contact and dynamics" alone).
     #[arg(long, value_enum, default_value_t = BenchSensing::Estimated)]
     pub sensing: BenchSensing,
+    /// quad16's walker with the whole-body layer and its long-swing trot (the
+    /// `vmc` controller's default) instead of Study A's `τ = Jᵀ f` with
+    /// Study A's trot, which the performance history measures.
+    #[arg(long)]
+    pub whole_body: bool,
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -122,10 +127,26 @@ pub fn bench_scenario(
     robots: usize,
     sensing: BenchSensing,
 ) -> Result<String, CliError> {
-    let controller = match model {
-        "quad16" => "kind = \"vmc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\"",
-        "quad12" => "kind = \"joint_pd\"",
-        other => {
+    bench_scenario_with(model, robots, sensing, false)
+}
+
+/// [`bench_scenario`]; quad16 under the whole-body layer when `whole_body`
+/// (otherwise Study A's `τ = Jᵀ f` and trot timing, as the history measured).
+pub fn bench_scenario_with(
+    model: &str,
+    robots: usize,
+    sensing: BenchSensing,
+    whole_body: bool,
+) -> Result<String, CliError> {
+    let controller = match (model, whole_body) {
+        ("quad16", false) => {
+            "kind = \"vmc\"\nwhole_body = false\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
+        }
+        ("quad16", true) => {
+            "kind = \"vmc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
+        }
+        ("quad12", _) => "kind = \"joint_pd\"",
+        (other, _) => {
             return Err(bad(format!("--model {other}: expected quad16 or quad12")));
         }
     };
@@ -177,7 +198,7 @@ impl BenchPoint {
 /// Builds, warms up and times one configuration.
 pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoint, CliError> {
     let build = |n: usize| {
-        let src = bench_scenario(&a.model, n, a.sensing)?;
+        let src = bench_scenario_with(&a.model, n, a.sensing, a.whole_body)?;
         let scn = parse_scenario(Path::new("bench.toml"), src).map_err(|e| bad(e.to_string()))?;
         build_world(
             &scn,
@@ -268,8 +289,10 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     println!(
         "{} ({}; controller on the {} state), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
         a.model,
-        if a.model == "quad16" {
-            "trotting at 0.5 m/s under VMC"
+        if a.model == "quad16" && a.whole_body {
+            "trotting at 0.5 m/s under VMC and the whole-body layer"
+        } else if a.model == "quad16" {
+            "trotting at 0.5 m/s under VMC, Study A's τ = Jᵀ f"
         } else {
             "standing under joint PD"
         },
