@@ -990,7 +990,6 @@ impl Walker {
 
         // 8. swing legs tracked by PD about the feed-forward, the stance ankle held
         for i in 0..nl {
-            let leg = &self.legs[i];
             let LegInfo { qi, vi, dof, .. } = self.leg_info[i];
             let touching = input.contacts.get(i).copied().unwrap_or(true);
             let free = self.scheduler.leg(i).phase == LegPhase::Swing
@@ -1014,14 +1013,7 @@ impl Walker {
                 let j = vi[3] - nv0;
                 // (the second solve: the foot where it stands; its ankle
                 // angle is `ik_clamped_ankle`'s, bit for bit)
-                let level = match &lanes_second {
-                    Some(a) if second[i].is_finite() => a[i][3],
-                    Some(_) => 0.0,
-                    None => match leg.ik_clamped_ankle(second[i], &self.params.ik) {
-                        Some(Ok(a)) => a,
-                        _ => 0.0,
-                    },
-                };
+                let level = self.level_ankle(i, &lanes_second, second[i]);
                 tau_joints[j] += kp * (level - q[qi[3]]) - kd * v[vi[3]];
             }
         }
@@ -1052,6 +1044,21 @@ impl Walker {
             .filter(|n| n.length_squared() > 0.5)
             .unwrap_or(DVec3::Z);
         (friction, n)
+    }
+
+    /// The ankle angle that keeps 4-DOF leg `i`'s foot level where it stands
+    /// (`foot_body`: its point in the measured base frame, the tick's second
+    /// solve): the lanes' angle when quad16's legs run in lanes,
+    /// `ik_clamped_ankle`'s otherwise (the same bits); 0 when unsolvable.
+    fn level_ankle(&self, i: usize, lanes_second: &Option<[[f64; 4]; 4]>, foot_body: DVec3) -> f64 {
+        match lanes_second {
+            Some(a) if foot_body.is_finite() => a[i][3],
+            Some(_) => 0.0,
+            None => match self.legs[i].ik_clamped_ankle(foot_body, &self.params.ik) {
+                Some(Ok(a)) => a,
+                _ => 0.0,
+            },
+        }
     }
 
     /// Steps 7–8 under the whole-body layer: stance feet that touch carry the
@@ -1161,14 +1168,7 @@ impl Walker {
             if li.dof == 4 {
                 let j = li.vi[3] - nv0;
                 let level = if stance {
-                    match lanes_second {
-                        Some(a) if second[i].is_finite() => a[i][3],
-                        Some(_) => 0.0,
-                        None => match self.legs[i].ik_clamped_ankle(second[i], &self.params.ik) {
-                            Some(Ok(a)) => a,
-                            _ => 0.0,
-                        },
-                    }
+                    self.level_ankle(i, lanes_second, second[i])
                 } else {
                     self.q_des[j]
                 };
