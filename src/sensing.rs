@@ -284,6 +284,9 @@ fn estimator_params(
     a.kp_radps = e.attitude_kp_radps.unwrap_or(a.kp_radps);
     a.ki_radps2 = e.attitude_ki_radps2.unwrap_or(a.ki_radps2);
     a.accel_filter_s = e.accel_filter_s.unwrap_or(a.accel_filter_s);
+    a.compensate_base_acceleration = e
+        .compensate_base_acceleration
+        .unwrap_or(a.compensate_base_acceleration);
     let k = &mut params.kf;
     k.accel_process_std = e.accel_process_std.unwrap_or(k.accel_process_std);
     k.foot_position_std_m = e.foot_position_std_m.unwrap_or(k.foot_position_std_m);

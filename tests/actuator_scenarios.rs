@@ -226,14 +226,16 @@ fn trot_at(v_x_mps: f64, dx_m: f64, table: &str) -> (bool, f64) {
     )
 }
 
-/// Why quad16's default is its DC motor: at 1.0 m/s the trot holds on the
-/// motors and falls on ideal sources. The runs are chaotic, so three
-/// micrometre neighbours of the start stand for the scenario (measured:
-/// ideal 6 of 6 fall, motors 1 of 6, `docs/actuators.md`); asserted: at
-/// most one of three falls on the motors, the others within 10 % of the
-/// command, and at least two of three fall on ideal sources.
+/// Why quad16's default is its DC motor: at 1.0 m/s Study A's trot holds on
+/// the motors, and falls at least as often on ideal sources. The runs are
+/// chaotic, so three micrometre neighbours of the start stand for the
+/// scenario (measured before the estimator compensated the base's
+/// acceleration: ideal 6 of 6 fall, motors 1 of 6; after, 2026-11-29:
+/// ideal 1 of 3, motors 0 of 3; `docs/actuators.md`); asserted: at most
+/// one of three falls on the motors, the others within 10 % of the
+/// command, and no more motor runs fall than ideal ones.
 #[test]
-fn quad16_holds_one_metre_per_second_on_its_motors_not_on_ideal_sources() {
+fn quad16_trots_at_one_metre_per_second_on_its_motors_at_least_as_well_as_on_ideal_sources() {
     let dxs = [3e-6, 6e-6, 9e-6];
     let motor: Vec<_> = dxs
         .iter()
@@ -244,11 +246,15 @@ fn quad16_holds_one_metre_per_second_on_its_motors_not_on_ideal_sources() {
         .map(|dx| trot_at(1.0, *dx, "kind = \"ideal\""))
         .collect();
     println!("1.0 m/s, (fell, mean speed): motors {motor:?}, ideal {ideal:?}");
-    assert!(motor.iter().filter(|r| r.0).count() <= 1, "{motor:?}");
+    let falls = |runs: &[(bool, f64)]| runs.iter().filter(|r| r.0).count();
+    assert!(falls(&motor) <= 1, "{motor:?}");
     for r in motor.iter().filter(|r| !r.0) {
         assert!((r.1 - 1.0).abs() < 0.1, "{motor:?}");
     }
-    assert!(ideal.iter().filter(|r| r.0).count() >= 2, "{ideal:?}");
+    assert!(
+        falls(&motor) <= falls(&ideal),
+        "motors {motor:?}, ideal {ideal:?}"
+    );
 }
 
 /// The table of `docs/actuators.md` ("Defaults"): falls out of six

@@ -65,6 +65,36 @@ fn attitude_filter_learns_a_gyro_bias() {
     );
 }
 
+/// A level torso speeding up at a constant 1 m/s² reads a specific force
+/// tilted by atan(a/g) ≈ 0.1 rad: the plain filter takes that for gravity
+/// and tilts by it (the steady state of its loop), while the filter told
+/// the base's acceleration keeps the true attitude.
+#[test]
+fn attitude_filter_compensates_the_base_acceleration() {
+    let truth = DQuat::from_rotation_z(-0.4);
+    let a = truth * DVec3::new(1.0, 0.0, 0.0);
+    let accel = truth.inverse() * (a - G);
+    let dt = 0.002;
+    let mut plain = AttitudeFilter::new(AttitudeParams::default(), truth);
+    let mut compensated = plain;
+    for _ in 0..(10.0 / dt) as usize {
+        plain.update(DVec3::ZERO, accel, 9.81, dt);
+        compensated.update_compensated(DVec3::ZERO, accel, a, 9.81, dt);
+    }
+    let tilt = |f: &AttitudeFilter| (f.orientation * DVec3::Z).angle_between(truth * DVec3::Z);
+    let expected = (1.0f64 / 9.81).atan();
+    assert!(
+        (tilt(&plain) - expected).abs() < 0.1 * expected,
+        "plain filter's tilt {} against atan(a/g) = {expected}",
+        tilt(&plain)
+    );
+    assert!(
+        tilt(&compensated) < 1e-9,
+        "compensated tilt {}",
+        tilt(&compensated)
+    );
+}
+
 fn quad16() -> (Model, Vec<ContactPoint>) {
     let desc = robots::builtin("quad16").unwrap();
     let model = Model::from_description(&desc, BaseKind::Floating).unwrap();

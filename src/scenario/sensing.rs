@@ -126,6 +126,9 @@ pub struct EstimatorSpec {
     pub attitude_ki_radps2: Option<f64>,
     /// Low-pass time constant of the world-frame specific force (s).
     pub accel_filter_s: Option<f64>,
+    /// Whether the attitude filter removes the base's estimated
+    /// acceleration from the specific force. Default true.
+    pub compensate_base_acceleration: Option<bool>,
     /// Kalman filter: acceleration input noise (m/s² √s).
     pub accel_process_std: Option<f64>,
     /// Kalman filter: foot position from kinematics (m).

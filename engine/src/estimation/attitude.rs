@@ -18,6 +18,14 @@
 //! R̂(t+Δt) = R̂ exp(ω̂ Δt)
 //! ```
 //!
+//! A torso that speeds up for longer than the filter's time constant (a
+//! commanded ramp, a trot's surge at 4 Hz that the low-pass only halves)
+//! would still tilt `f̄` by `a/g`: each update may therefore subtract the
+//! base's own world acceleration, as the position filter estimates it
+//! ([`AttitudeFilter::update`]'s `base_accel_world_mps2`; MIT Cheetah's
+//! and Pronto's estimators feed their velocity back the same way), so that
+//! `f̄` is the low-passed `f − a` = gravity's reaction alone.
+//!
 //! The correction is skipped when `| |f̄| − g |` exceeds `accel_gate_mps2`.
 //! Yaw is not observable from gravity: it follows the gyro alone (and drifts
 //! with its bias about z).
@@ -36,18 +44,23 @@ pub struct AttitudeParams {
     pub accel_gate_mps2: f64,
     /// Time constant of the low-pass on the world-frame specific force (s; 0: none).
     pub accel_filter_s: f64,
+    /// Whether the base estimator removes the base's own estimated
+    /// acceleration from the specific force ([`AttitudeFilter::update_compensated`]).
+    pub compensate_base_acceleration: bool,
 }
 
 impl Default for AttitudeParams {
     /// `k_P` = 1 rad/s (gyro drift corrected within seconds), `k_I` =
     /// 0.05 rad/s², gate 3 m/s², and a 0.25 s filter (half of Study A's
-    /// 0.5 s gait period; slower than `1/k_P` would let the loop ring).
+    /// 0.5 s gait period; slower than `1/k_P` would let the loop ring),
+    /// with the base's acceleration compensated.
     fn default() -> Self {
         AttitudeParams {
             kp_radps: 1.0,
             ki_radps2: 0.05,
             accel_gate_mps2: 3.0,
             accel_filter_s: 0.25,
+            compensate_base_acceleration: true,
         }
     }
 }
@@ -82,6 +95,20 @@ impl AttitudeFilter {
     /// One update over `dt_s` with the gyro (rad/s) and accelerometer
     /// (specific force, m/s²) readings, both torso frame; `g_mps2` is |gravity|.
     pub fn update(&mut self, gyro_radps: DVec3, accel_mps2: DVec3, g_mps2: f64, dt_s: f64) {
+        self.update_compensated(gyro_radps, accel_mps2, DVec3::ZERO, g_mps2, dt_s);
+    }
+
+    /// [`Self::update`] with the base's own acceleration (m/s², world)
+    /// removed from the specific force before the low-pass: the reference
+    /// direction is then gravity's even while the torso speeds up.
+    pub fn update_compensated(
+        &mut self,
+        gyro_radps: DVec3,
+        accel_mps2: DVec3,
+        base_accel_world_mps2: DVec3,
+        g_mps2: f64,
+        dt_s: f64,
+    ) {
         // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
         // fused multiply–add, so the same bits), in a free function:
         // multiversion takes no `self`
@@ -90,11 +117,12 @@ impl AttitudeFilter {
             this: &mut AttitudeFilter,
             gyro_radps: DVec3,
             accel_mps2: DVec3,
+            base_accel_world_mps2: DVec3,
             g_mps2: f64,
             dt_s: f64,
         ) {
             let p = this.params;
-            let f_w = this.orientation * accel_mps2;
+            let f_w = this.orientation * accel_mps2 - base_accel_world_mps2;
             let alpha = if p.accel_filter_s > 0.0 {
                 1.0 - (-dt_s / p.accel_filter_s).exp()
             } else {
@@ -115,6 +143,13 @@ impl AttitudeFilter {
             this.omega_radps = gyro_radps - this.gyro_bias_radps;
             this.orientation = (this.orientation * DQuat::from_scaled_axis(w * dt_s)).normalize();
         }
-        body(self, gyro_radps, accel_mps2, g_mps2, dt_s)
+        body(
+            self,
+            gyro_radps,
+            accel_mps2,
+            base_accel_world_mps2,
+            g_mps2,
+            dt_s,
+        )
     }
 }

@@ -133,6 +133,11 @@ pub struct BaseEstimator {
     history_head: usize,
     /// Time of the last fused mocap capture (s).
     last_mocap_t_s: Option<f64>,
+    /// The position filter's velocity at the previous update (m/s, world),
+    /// whose change is the base acceleration the attitude filter removes.
+    previous_velocity_mps: DVec3,
+    /// That acceleration (m/s², world), from the last two updates.
+    base_accel_world_mps2: DVec3,
 }
 
 impl BaseEstimator {
@@ -183,6 +188,8 @@ impl BaseEstimator {
             history: Vec::with_capacity(if params.mocap.enabled { HISTORY } else { 0 }),
             history_head: 0,
             last_mocap_t_s: None,
+            previous_velocity_mps: v_world,
+            base_accel_world_mps2: DVec3::ZERO,
             params,
         }
     }
@@ -190,10 +197,17 @@ impl BaseEstimator {
     /// One estimator update (call on every new IMU sample).
     pub fn update(&mut self, model: &Model, input: &EstimatorInput<'_>) {
         let dt = input.dt_s.max(0.0);
-        // 1. attitude
-        self.attitude.update(
+        // 1. attitude, with the base's acceleration of the last update
+        //    (from the position filter: leg odometry pins its velocity)
+        let base_accel = if self.params.attitude.compensate_base_acceleration {
+            self.base_accel_world_mps2
+        } else {
+            DVec3::ZERO
+        };
+        self.attitude.update_compensated(
             input.gyro_radps,
             input.accel_mps2,
+            base_accel,
             self.gravity_mps2.length(),
             dt,
         );
@@ -251,6 +265,11 @@ impl BaseEstimator {
         }
         // 4. measurement update
         self.kf.update(&self.meas[..n]);
+        let v = self.kf.velocity_mps();
+        if dt > 0.0 {
+            self.base_accel_world_mps2 = (v - self.previous_velocity_mps) / dt;
+        }
+        self.previous_velocity_mps = v;
         self.set_estimate(input.t_s, omega, input.terrain);
         self.remember();
     }
