@@ -18,7 +18,7 @@ use quadsim_engine::control::joint_pd::{JointPd, bandwidth_gains, static_stance_
 use quadsim_engine::control::prescribed::{Prescribed, PrescribedMode, PrescribedParams};
 use quadsim_engine::control::profile::{RobotProfile, STAND_BANDWIDTH_HZ};
 use quadsim_engine::control::vmc::VmcCommand;
-use quadsim_engine::control::walker::{Walker, WalkerParams};
+use quadsim_engine::control::walker::{Planner, Walker, WalkerParams};
 use quadsim_engine::description::{RobotDescription, Shape};
 use quadsim_engine::gait::{Gait, GaitKind};
 use quadsim_engine::integrate::{Integrator, State};
@@ -877,6 +877,23 @@ fn controller(
             if wp.whole_body {
                 wp.gait = Gait::long_swing_trot();
             }
+            wp.planner = match c.params.get("planner").and_then(|v| v.as_str()) {
+                None | Some("vmc") => Planner::Vmc,
+                Some("mpc") if wp.whole_body => Planner::Mpc,
+                Some("mpc") => {
+                    return Err(loc.at(
+                        &format!("{p}.controller.planner"),
+                        "the \"mpc\" planner needs the whole-body layer (whole_body = true)"
+                            .to_string(),
+                    ));
+                }
+                Some(other) => {
+                    return Err(loc.at(
+                        &format!("{p}.controller.planner"),
+                        format!("unknown planner '{other}' (vmc, mpc)"),
+                    ));
+                }
+            };
             let kp = format!("{p}.controller");
             if let Some(name) = c.params.get("gait").and_then(|v| v.as_str()) {
                 let kind = GaitKind::from_name(name).ok_or_else(|| {

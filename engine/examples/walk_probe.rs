@@ -153,6 +153,27 @@ fn main() {
     if std::env::var("WB").is_ok() {
         p.whole_body = true;
     }
+    if std::env::var("MPC").is_ok() {
+        p.whole_body = true;
+        p.planner = quadsim_engine::control::walker::Planner::Mpc;
+    }
+    if let Some(x) = env("MPCF") {
+        p.mpc.force_weight = x;
+    }
+    if let Some(x) = env("MPCDT") {
+        p.mpc.step_s = x;
+    }
+    if let Ok(w) = std::env::var("MPCW") {
+        for (k, x) in w.split(',').enumerate().take(12) {
+            p.mpc.state_weights[k] = x.parse().unwrap();
+        }
+    }
+    if let Some(x) = env("MPCEVERY") {
+        p.mpc.solve_every_s = x;
+    }
+    if let Some(x) = env("MPCN") {
+        p.mpc.horizon_steps = x as usize;
+    }
     if let Some(x) = env("WBF") {
         p.wbc.force_weight = x;
     }

@@ -5,6 +5,7 @@
 pub mod active_set;
 pub mod force_qp;
 pub mod joint_pd;
+pub mod mpc;
 pub mod prescribed;
 pub mod profile;
 pub mod vmc;

@@ -52,6 +52,7 @@ use crate::terrain::{Terrain, TerrainUnion};
 use glam::{DMat3, DVec2, DVec3};
 
 use super::force_qp::{FootForces, ForceQp, ForceQpParams, MAX_FEET, StanceFoot, stance_torques};
+use super::mpc::{MPC_FEET, Mpc, MpcParams, MpcProblem, NX, composite_inertia_about_com};
 use super::profile::RobotProfile;
 use super::vmc::{Vmc, VmcCommand, VmcInput, VmcParams};
 use super::wbc::{BodyTask, ContactTask, JointTask, PointTask, WbcParams, WholeBody};
@@ -171,6 +172,23 @@ pub struct WalkerParams {
     /// Joint-posture gains (1/s², 1/s) of the whole-body layer for joints the
     /// feet's tasks leave free (a 4-DOF leg's ankle).
     pub posture_gains: (f64, f64),
+    /// Which planner chooses the stance feet's forces.
+    pub planner: Planner,
+    /// Tuning of the [`Planner::Mpc`] planner.
+    pub mpc: MpcParams,
+}
+
+/// The body-force planner of a [`Walker`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Planner {
+    /// Study A's virtual model control: the virtual wrench of six
+    /// spring–dampers, distributed over the stance feet ([`super::vmc`],
+    /// [`super::force_qp`]).
+    #[default]
+    Vmc,
+    /// Convex MPC on the single rigid body over the gait's contact plan
+    /// ([`super::mpc`]).
+    Mpc,
 }
 
 impl WalkerParams {
@@ -262,6 +280,8 @@ impl WalkerParams {
             wbc: WbcParams::default(),
             swing_task_gains: (900.0, 60.0),
             posture_gains: (400.0, 40.0),
+            planner: Planner::Vmc,
+            mpc: MpcParams::default(),
             swing_max_acc_mps2: 0.0,
         }
     }
@@ -419,6 +439,21 @@ pub struct Walker {
     v_filt_init: bool,
     /// The whole-body layer's workspace (when [`WalkerParams::whole_body`]).
     wbc: Option<Box<WholeBody>>,
+    /// The MPC planner and its problem (when [`Planner::Mpc`]).
+    mpc: Option<Box<MpcPlan>>,
+}
+
+/// The MPC planner's state between ticks.
+#[derive(Clone, Debug)]
+struct MpcPlan {
+    mpc: Mpc,
+    problem: MpcProblem,
+    /// Time since the last solve (s); ∞ before the first.
+    since_solve_s: f64,
+    /// The stance feet the last solve planned for.
+    stance: [bool; MPC_FEET],
+    /// Solves so far.
+    solves: usize,
 }
 
 impl Walker {
@@ -523,6 +558,15 @@ impl Walker {
             wbc: params
                 .whole_body
                 .then(|| Box::new(WholeBody::new(model, params.wbc))),
+            mpc: (params.planner == Planner::Mpc).then(|| {
+                Box::new(MpcPlan {
+                    mpc: Mpc::new(params.mpc),
+                    problem: MpcProblem::with_horizon(params.mpc.horizon_steps.max(1)),
+                    since_solve_s: f64::INFINITY,
+                    stance: [false; MPC_FEET],
+                    solves: 0,
+                })
+            }),
             params,
         })
     }
@@ -965,6 +1009,10 @@ impl Walker {
             Ok(f) => f,
             Err(_) => [DVec3::ZERO; MAX_FEET],
         };
+        if self.mpc.is_some() {
+            let loaded: [bool; MAX_FEET] = std::array::from_fn(|i| i < nl && feet[i].load > 0.0);
+            self.plan_by_mpc(model, data, input, com, com_vel, rot, &loaded);
+        }
 
         if self.wbc.is_some() {
             self.whole_body_torques(
@@ -1028,6 +1076,126 @@ impl Walker {
 }
 
 impl Walker {
+    /// [`Planner::Mpc`]: the stance forces from the convex MPC (solved again
+    /// when due or when the loaded feet change), and the wrench about the
+    /// CoM they make (the whole-body layer's body task).
+    #[allow(clippy::too_many_arguments)]
+    fn plan_by_mpc(
+        &mut self,
+        model: &Model,
+        data: &Data,
+        input: &WalkerInput<'_>,
+        com: DVec3,
+        com_vel: DVec3,
+        rot: DMat3,
+        loaded: &[bool; MAX_FEET],
+    ) {
+        let nl = self.legs.len().min(MPC_FEET);
+        // taken out for the tick (it reads the walker's other state)
+        let Some(mut plan) = self.mpc.take() else {
+            return;
+        };
+        plan.since_solve_s += input.dt_s;
+        let changed = loaded[..MPC_FEET] != plan.stance[..];
+        if changed || plan.since_solve_s + 1e-12 >= plan.mpc.params.solve_every_s {
+            let n = plan.mpc.params.horizon_steps;
+            let dt = plan.mpc.params.step_s;
+            let gait = *self.scheduler.gait();
+            let period = gait.period_s();
+            let phase = self.scheduler.phase();
+            let cmd = self.vmc.command;
+            let rpy = crate::spatial::rpy_from_rot(rot);
+            let yaw = rpy.z;
+            let heading = DMat3::from_rotation_z(yaw);
+            let v_des = heading * DVec3::new(cmd.forward_mps, cmd.lateral_mps, 0.0);
+            let base = data.pose[0];
+            let ground_z = input.terrain.height(com.x, com.y).unwrap_or(0.0);
+            // the CoM's height target: the base's, less the CoM's offset below it
+            let z_ref = ground_z + self.vmc.params.base_height_m - (base.trans.z - com.z);
+            let (mass, _, inertia_world) = composite_inertia_about_com(model, data);
+            let plan = &mut *plan;
+            let pb = &mut plan.problem;
+            pb.mass_kg = mass + self.vmc.params.payload_mass_kg;
+            pb.inertia_heading = heading.transpose() * inertia_world * heading;
+            pb.gravity = model.gravity;
+            pb.state = super::mpc::MpcState {
+                rpy,
+                com_m: com,
+                omega_world_radps: data.vel[0].ang,
+                com_velocity_mps: com_vel,
+            };
+            let stance_s = gait.stance_duration_s();
+            for k in 0..n {
+                let t = (k + 1) as f64 * dt;
+                let p = com + v_des * t;
+                let r = &mut pb.reference[k];
+                *r = [0.0; NX];
+                r[2] = yaw + cmd.yaw_rate_radps * t;
+                r[3] = p.x;
+                r[4] = p.y;
+                r[5] = z_ref;
+                r[8] = cmd.yaw_rate_radps;
+                r[9] = v_des.x;
+                r[10] = v_des.y;
+                // contact plan over this step (its middle), feet relative
+                // to the reference CoM at the step's start
+                let t_mid = (k as f64 + 0.5) * dt;
+                let c_ref = com + v_des * (k as f64 * dt);
+                let step = &mut pb.steps[k];
+                for i in 0..MPC_FEET {
+                    step.stance[i] = false;
+                    if i >= nl {
+                        continue;
+                    }
+                    let leg = self.scheduler.leg(i);
+                    let stance = if k == 0 {
+                        loaded[i]
+                    } else {
+                        gait.scheduled_stance(i, phase + t_mid / period)
+                    };
+                    if !stance {
+                        continue;
+                    }
+                    let foot = if leg.phase == LegPhase::Stance
+                        && t_mid < self.scheduler.time_to_liftoff_s(i)
+                    {
+                        self.feet_world[i]
+                    } else if leg.phase == LegPhase::Swing
+                        && t_mid < leg.time_to_touchdown_s() + stance_s
+                    {
+                        leg.touchdown_pos_m
+                    } else {
+                        // a later stance: under the hip then, half a stance ahead
+                        let hip = base.transform_point(self.legs[i].mount().trans);
+                        let h = hip + v_des * (t_mid + 0.5 * stance_s);
+                        DVec3::new(h.x, h.y, ground_z)
+                    };
+                    step.stance[i] = true;
+                    step.foot_m[i] = foot - c_ref;
+                    step.friction[i] = self.foot_ground(input, i).0;
+                }
+            }
+            if plan.mpc.solve(pb).is_ok() {
+                plan.since_solve_s = 0.0;
+                plan.stance = *loaded;
+                plan.solves += 1;
+            }
+        }
+        let f = plan.mpc.first_forces();
+        let mut w = Force::ZERO;
+        for i in 0..nl {
+            self.forces[i] = if loaded[i] && plan.stance[i] {
+                f[i]
+            } else {
+                DVec3::ZERO
+            };
+            w.lin += self.forces[i];
+            w.ang += (self.feet_world[i] - com).cross(self.forces[i]);
+        }
+        self.wrench = w;
+        self.mpc = Some(plan);
+    }
+
     /// The friction the force plan may use at foot `i` (the ground's μ under
     /// it times [`WalkerParams::friction_fraction`]; 0.5 off every terrain)
     /// and the ground's normal there (unit, world; +z when unknown).
