@@ -190,7 +190,7 @@ impl LaneBatching {
     pub fn across_robots(self, model: &quadsim_engine::Model) -> bool {
         match self {
             Self::Off => false,
-            Self::Auto => !quadsim_engine::leg_lanes::runs_on(model),
+            Self::Auto => !quadsim_engine::dispatch::runs_on(model),
             Self::AcrossRobots => true,
         }
     }

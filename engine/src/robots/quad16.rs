@@ -57,7 +57,7 @@
 //! leaves a margin above that.
 
 use super::params::{Domain, ParamSpec, Values};
-use super::{box_torso, solid_link};
+use super::links::{box_torso, solid_link};
 use crate::description::{JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
 use crate::spatial::Transform;
 use glam::{DMat3, DVec3};
