@@ -134,11 +134,7 @@ pub(crate) fn leg_mass_sums_scalar(
 /// The CoM and its velocity from the legs' sums (`leg_mass_sums`' layout):
 /// the base's terms, then leg 0, …, leg 3 added in turn.
 #[inline]
-pub(crate) fn add_base(
-    model: &Model,
-    data: &Data,
-    legs: &[[f64; LEGS]; 7],
-) -> (DVec3, DVec3) {
+pub(crate) fn add_base(model: &Model, data: &Data, legs: &[[f64; LEGS]; 7]) -> (DVec3, DVec3) {
     let ri = data.body_inertia(model, 0);
     let mut m = ri.mass;
     let (mut mc, mut p) = com_terms(&ri, &data.vel[0]);

@@ -3,9 +3,9 @@
 //! inertias add without transforms).
 
 use crate::data::Data;
-use crate::workspace::BodyScratch;
 use crate::kinematics::forward_kinematics_pos;
 use crate::model::{JointType, Model, NO_PARENT};
+use crate::workspace::BodyScratch;
 
 pub use crate::workspace::MassMatrix;
 

@@ -378,8 +378,8 @@ fn body_bit(body: usize) -> u64 {
 mod tests {
     use super::*;
     use crate::dispatch::forward_kinematics;
-    use crate::model::BaseKind;
     use crate::dispatch::rnea;
+    use crate::model::BaseKind;
     use crate::robots::{builtin, nominal_q};
 
     fn model(name: &str, scale_mass: f64) -> Model {

@@ -14,7 +14,8 @@
 //! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
 //! | ABA (forward dynamics) | [`aba`] | `ddq` |
 //! | kinematics + ABA for 4 robots of one model in SIMD lanes | [`batch`] | `BatchData::ddq` |
-//! | kinematics and ABA of one robot with its 4 legs in AVX lanes, chosen inside [`kinematics`] and [`aba`] for quad16's shape (same bits) | [`leg_lanes`] | the same fields |
+//! | kinematics, ABA and RNEA of one robot with its 4 legs in AVX lanes (same bits), for the model's [`plan::Plan::LegsX4`] | [`kernels::legs_x4`] | the same fields |
+//! | one entry point per algorithm, matching on the model's plan | [`dispatch`] | the same fields |
 //! | point Jacobians | [`jacobian`] | `jacobian` |
 //! | CoM, momentum | [`com`] | (returns) |
 //! | energies | [`energy`] | (returns) |

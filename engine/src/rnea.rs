@@ -89,7 +89,13 @@ pub fn rnea_joint_torques_from_kinematics(
 }
 
 #[multiversion(targets("x86_64+avx2+fma"))]
-pub(crate) fn rnea_bodies(model: &Model, data: &mut Data, v: &[f64], a: &[f64], use_external: bool) {
+pub(crate) fn rnea_bodies(
+    model: &Model,
+    data: &mut Data,
+    v: &[f64],
+    a: &[f64],
+    use_external: bool,
+) {
     for i in 1..model.nbodies {
         let p = model.parent[i];
         let iv = model.idx_v[i];

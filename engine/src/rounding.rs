@@ -29,4 +29,3 @@ pub fn round_half_away(x: f64) -> f64 {
         x
     }
 }
-

@@ -31,7 +31,6 @@
 //! 1 ulp apart for |x| ≤ 2²⁰·π/2 ≈ 1.6·10⁶ rad (test
 //! `within_one_ulp_of_std`).
 
-
 // msun's constants by their bits (e_rem_pio2.c, k_sin.c, k_cos.c).
 /// 1.5·2⁵²: adding it rounds a double of magnitude < 2⁵¹ to an integer.
 pub(crate) const TO_INT: f64 = 1.5 / f64::EPSILON;

@@ -30,19 +30,56 @@ fn the_reader_finds_a_planted_circle() {
     let dir = std::env::temp_dir().join(format!("quadsim-import-graph-{}", std::process::id()));
     let src = dir.join("src");
     std::fs::create_dir_all(src.join("k")).unwrap();
-    std::fs::write(src.join("lib.rs"), "pub mod a;\npub mod b;\npub mod c;\npub mod k;\npub use a::A;\n").unwrap();
-    std::fs::write(src.join("a.rs"), "use crate::b::B; // crate::c in a comment\npub struct A;\n").unwrap();
-    std::fs::write(src.join("b.rs"), "pub struct B;\npub fn f() -> crate::A { crate::A }\n").unwrap();
-    std::fs::write(src.join("c.rs"), "use crate::{a::A, k::{K, j}};\n#[cfg(test)]\nmod tests { use crate::c; }\n").unwrap();
+    std::fs::write(
+        src.join("lib.rs"),
+        "pub mod a;\npub mod b;\npub mod c;\npub mod k;\npub use a::A;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("a.rs"),
+        "use crate::b::B; // crate::c in a comment\npub struct A;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("b.rs"),
+        "pub struct B;\npub fn f() -> crate::A { crate::A }\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("c.rs"),
+        "use crate::{a::A, k::{K, j}};\n#[cfg(test)]\nmod tests { use crate::c; }\n",
+    )
+    .unwrap();
     std::fs::write(src.join("k/mod.rs"), "mod j;\npub use j::K;\n").unwrap();
-    std::fs::write(src.join("k/j.rs"), "pub struct K;\nconst S: &str = \"crate::c\";\n").unwrap();
+    std::fs::write(
+        src.join("k/j.rs"),
+        "pub struct K;\nconst S: &str = \"crate::c\";\n",
+    )
+    .unwrap();
     let graph = import_graph::file_graph(&src);
     std::fs::remove_dir_all(&dir).ok();
     let deps = |m: &str| graph[m].iter().cloned().collect::<Vec<_>>();
     assert_eq!(deps("a"), ["b"]);
-    assert_eq!(deps("b"), ["a"], "crate::A is a's, through lib.rs's re-export");
-    assert_eq!(deps("c"), ["a", "k", "k::j"]);
-    assert!(deps("k").is_empty(), "a façade's re-export of its child is no edge");
-    assert!(deps("k::j").is_empty(), "strings and test modules are no imports");
-    assert_eq!(import_graph::circles(&graph), vec![vec!["a".to_string(), "b".to_string()]]);
+    assert_eq!(
+        deps("b"),
+        ["a"],
+        "crate::A is a's, through lib.rs's re-export"
+    );
+    assert_eq!(
+        deps("c"),
+        ["a", "k::j"],
+        "K is k::j's, through k's re-export"
+    );
+    assert!(
+        deps("k").is_empty(),
+        "a façade's re-export of its child is no edge"
+    );
+    assert!(
+        deps("k::j").is_empty(),
+        "strings and test modules are no imports"
+    );
+    assert_eq!(
+        import_graph::circles(&graph),
+        vec![vec!["a".to_string(), "b".to_string()]]
+    );
 }

@@ -35,9 +35,9 @@ pub mod friction;
 pub mod law;
 pub mod stability;
 
+pub use crate::material::{GroundMaterial, GroundPreset};
 pub use error::ContactError;
 pub use law::NormalLaw;
-pub use crate::material::{GroundMaterial, GroundPreset};
 pub use stability::{StabilityWarning, check_stability};
 
 use crate::data::Data;
@@ -47,7 +47,6 @@ use crate::model::Model;
 use crate::spatial::{Force, Motion};
 use crate::terrain::{TerrainHit, TerrainUnion};
 use glam::DVec3;
-
 
 /// What part of the robot a contact point belongs to; a torso or knee
 /// touching the ground is a fall.

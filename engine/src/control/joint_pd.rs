@@ -2,8 +2,8 @@
 //! feed-forward that carries the robot's weight on its feet.
 
 use crate::data::Data;
-use crate::jacobian::add_point_force_jt;
 use crate::dispatch::forward_kinematics_pos;
+use crate::jacobian::add_point_force_jt;
 use crate::model::Model;
 use crate::nle::generalized_gravity;
 use glam::DVec3;

@@ -149,7 +149,7 @@ pub(crate) fn cis(theta: f64) -> DVec2 {
     DVec2::new(c, s)
 }
 
-/// `e^{iθ}` of four angles at once ([`crate::trig::sin_cos_x4`]; the same
+/// `e^{iθ}` of four angles at once ([`crate::kernels::sin_cos_x4`]; the same
 /// bits as [`cis`] of each).
 #[inline]
 pub(crate) fn cis4(theta: [f64; 4]) -> [DVec2; 4] {

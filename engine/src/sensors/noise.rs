@@ -75,9 +75,9 @@ pub fn quantize(x: f64, quantum: f64) -> f64 {
     }
 }
 
-pub use crate::rounding::round_half_away;
 #[cfg(test)]
 use crate::rounding::TWO_52;
+pub use crate::rounding::round_half_away;
 
 /// `x` clamped to `[-limit, limit]` (`limit` = ∞: `x`).
 #[inline]

@@ -290,9 +290,14 @@ pub fn file_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
     let resolve = |abs: &Vec<String>| -> Option<Vec<String>> {
         let mut abs = abs.clone();
         for _ in 0..8 {
-            let k = (0..=abs.len()).rev().find(|&k| mods.contains_key(&abs[..k]))?;
+            let k = (0..=abs.len())
+                .rev()
+                .find(|&k| mods.contains_key(&abs[..k]))?;
             let t = abs[..k].to_vec();
-            match abs.get(k).and_then(|n| reexports.get(&(t.clone(), n.clone()))) {
+            match abs
+                .get(k)
+                .and_then(|n| reexports.get(&(t.clone(), n.clone())))
+            {
                 Some(to) if to != &abs => {
                     let mut next = to.clone();
                     next.extend(abs[k + 1..].iter().cloned());

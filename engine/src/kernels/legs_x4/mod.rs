@@ -23,7 +23,6 @@ mod ik;
 pub(crate) mod passes;
 pub(crate) mod workspace;
 
-
 /// quad16's four legs in lanes for the closed-form IK ([`legs_ik`]); an
 /// empty stand-in off x86-64.
 #[cfg(target_arch = "x86_64")]
@@ -68,8 +67,8 @@ pub(crate) fn legs_ik(
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use crate::dispatch::{aba, aba_from_kinematics, forward_kinematics};
-    use crate::plan::{LEGS, Plan};
     use crate::model::BaseKind;
+    use crate::plan::{LEGS, Plan};
     use crate::{Data, Model};
     use glam::{DQuat, DVec3};
     use rand::{Rng, SeedableRng};
@@ -194,7 +193,7 @@ mod tests {
         }
     }
 
-    /// [`crate::kinematics::leg_end_points`] gives the bits of
+    /// [`crate::dispatch::leg_end_points`] gives the bits of
     /// `Data::body_point_world` and `Data::body_point_velocity` after the
     /// full kinematics on the general path, at random states and points,
     /// floating and fixed base (the estimator's feet, base at rest, among

@@ -3,10 +3,10 @@
 //! comments).
 
 use super::workspace::{GroupAba, GroupKinematics, give_back_group_aba, take_group_aba};
-use crate::kernels::f64x4::{F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer};
-use crate::plan::{GroupStep, LEGS, LegLanes};
 use crate::data::Data;
+use crate::kernels::f64x4::{F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer};
 use crate::model::{JointType, Model};
+use crate::plan::{GroupStep, LEGS, LegLanes};
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
 
