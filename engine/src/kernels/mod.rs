@@ -4,7 +4,7 @@
 //!
 //! - [`legs_x4`]: one robot whose base carries four identical unbranched
 //!   legs (quad16, quad12), the four bodies at each depth in one AVX
-//!   register ([`f64x4::F4`]).
+//!   register (`f64x4::F4`).
 //! - [`crate::batch`]: four robots of one model side by side, one robot per
 //!   lane (`batch::lanes`).
 //!
@@ -59,7 +59,7 @@ pub fn cpu_has_lanes() -> bool {
 
 /// Sine and cosine of four angles at once, bit for bit
 /// [`crate::trig::sin_cos`] of each: on x86-64-v3 one AVX register
-/// ([`f64x4::F4::sin_cos`], the operations of [`crate::trig::sin_cos_lanes`]
+/// (`f64x4::F4::sin_cos`, the operations of [`crate::trig::sin_cos_lanes`]
 /// as intrinsics), elsewhere [`crate::trig::sin_cos_lanes`]. The CPU picks
 /// one at the first call; the same bits either way.
 #[multiversion::multiversion(targets("x86_64+avx2+fma"))]

@@ -2,7 +2,7 @@
 //! SIMD lanes** ([`crate::plan::Plan::LegsX4`]): for a base carrying four
 //! unbranched chains of identical shape — quad16's and quad12's legs — the
 //! four bodies at each depth are one group of four f64 lanes in an AVX
-//! register ([`crate::kernels::f64x4`]), and the base stays scalar.
+//! register (`kernels::f64x4`), and the base stays scalar.
 //!
 //! The per-robot passes spend their time in short dependent chains of
 //! 3-vector and 3×3 arithmetic, one body after another; the four legs' chains
