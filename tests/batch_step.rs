@@ -131,7 +131,7 @@ fn herd_stepped_in_lanes_equals_herd_stepped_robot_by_robot_bit_for_bit() {
     let mut expected = Vec::new();
     let mut start = 0;
     for size in sizes {
-        let legs = quadsim_engine::leg_lanes::runs_on(&batch.sims[start].model);
+        let legs = quadsim_engine::dispatch::runs_on(&batch.sims[start].model);
         let alone = [1].repeat(size);
         expected.extend(if legs { alone } else { vec![size] });
         start += size;

@@ -176,7 +176,7 @@ pub enum LaneBatching {
     Off,
     /// Robots in lanes across robots, except those whose model runs its
     /// four legs in lanes within the robot on this CPU
-    /// ([`quadsim_engine::leg_lanes::runs_on`]): quad16 and quad12 step
+    /// ([`quadsim_engine::dispatch::runs_on`]): quad16 and quad12 step
     /// faster alone that way (docs/batch.md, "Lanes across robots or across
     /// legs"). The default.
     #[default]
@@ -190,7 +190,7 @@ impl LaneBatching {
     pub fn across_robots(self, model: &quadsim_engine::Model) -> bool {
         match self {
             Self::Off => false,
-            Self::Auto => !quadsim_engine::leg_lanes::runs_on(model),
+            Self::Auto => !quadsim_engine::dispatch::runs_on(model),
             Self::AcrossRobots => true,
         }
     }

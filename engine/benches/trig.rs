@@ -1,12 +1,13 @@
 //! Criterion benchmarks of the sine and cosine of joint angles: std's
 //! `f64::sin_cos` (the platform libm), `libm::sincos` (scalar, what
 //! [`quadsim_engine::trig::sin_cos`] calls) and the four-lane
-//! [`quadsim_engine::trig::sin_cos_x4`] (bit for bit libm's, per lane), each
+//! [`quadsim_engine::kernels::sin_cos_x4`] (bit for bit libm's, per lane), each
 //! over the same 64 joint angles in [−π, π]. Run with
 //! `cargo bench -p quadsim-engine --bench trig`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use quadsim_engine::trig::{sin_cos, sin_cos_lanes, sin_cos_x4};
+use quadsim_engine::kernels::sin_cos_x4;
+use quadsim_engine::trig::{sin_cos, sin_cos_lanes};
 use std::hint::black_box;
 
 fn angles() -> Vec<f64> {

@@ -1,10 +1,10 @@
 //! A/B timing of ABA on quad16 that holds up on a loaded machine: the
 //! legs-in-lanes path and the general path (the same model with
-//! `leg_lanes = None`) in alternating batches of calls in one process,
+//! `Plan::Scalar`) in alternating batches of calls in one process,
 //! each side's time the minimum (and 10th percentile) over the batches,
 //! so time slices lost to other processes drop out. Also checks that both
 //! give the same bits. `cargo run --release -p quadsim-engine --example aba_ab`
-use quadsim_engine::aba::aba;
+use quadsim_engine::dispatch::aba;
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::{Data, Model};
 use rand::SeedableRng;
@@ -15,9 +15,9 @@ use std::time::Instant;
 fn main() {
     let desc = quadsim_engine::robots::builtin("quad16").expect("built-in quad16");
     let fast = Model::from_description(&desc, BaseKind::Floating).expect("quad16 compiles");
-    assert!(fast.leg_lanes.is_some(), "quad16 has four legs in lanes");
+    assert!(fast.leg_lanes().is_some(), "quad16 has four legs in lanes");
     let mut general = fast.clone();
-    general.leg_lanes = None;
+    general.plan = quadsim_engine::plan::Plan::Scalar;
     // the benchmark's state (engine/benches/dynamics.rs)
     let mut r = ChaCha8Rng::seed_from_u64(42);
     let (q, v, tau) = quadsim_engine::robots::benchmark_state(&fast, &mut r);

@@ -2,10 +2,11 @@
 //! in O(n) (Featherstone 2008, §7.3, Table 7.1, in the fixed-frame form where
 //! articulated inertias add without transforms; floating base per §9.2).
 
-use crate::data::{BodyScratch, Data};
+use crate::data::Data;
 use crate::kinematics::forward_kinematics;
 use crate::model::{JointType, Model};
 use crate::spatial::{Force, Motion, outer};
+use crate::workspace::BodyScratch;
 use glam::DVec3;
 use multiversion::multiversion;
 
@@ -19,8 +20,10 @@ pub fn aba<'d>(model: &Model, data: &'d mut Data, q: &[f64], v: &[f64], tau: &[f
     &data.ddq
 }
 
-/// ABA after [`forward_kinematics`] on the same `(q, v)`. With `use_external`,
-/// the forces in `data.f_ext` (world axes, about `data.origin`) act on the bodies.
+/// ABA after the scalar [`forward_kinematics`] on the same `(q, v)`. With
+/// `use_external`, the forces in `data.f_ext` (world axes, about
+/// `data.origin`) act on the bodies. The scalar path, whatever the model's
+/// plan ([`crate::dispatch::aba_from_kinematics`] picks the plan's kernel).
 pub fn aba_from_kinematics(
     model: &Model,
     data: &mut Data,
@@ -28,48 +31,27 @@ pub fn aba_from_kinematics(
     tau: &[f64],
     use_external: bool,
 ) {
-    aba_passes(model, data, v, tau, use_external, true);
+    aba_compiled(model, data, v, tau, use_external);
 }
 
-/// [`aba_from_kinematics`] for the integrator, which needs `ddq` only: the
-/// bodies' accelerations `data.acc` but the base's are left unspecified
-/// (the legs-in-lanes path does not store them; nothing on the step path
-/// reads them, and [`crate::integrate::step`] documents it).
-pub(crate) fn aba_ddq_from_kinematics(
-    model: &Model,
-    data: &mut Data,
-    v: &[f64],
-    tau: &[f64],
-    use_external: bool,
-) {
-    aba_passes(model, data, v, tau, use_external, false);
-}
-
-/// The three passes of [`aba_from_kinematics`], compiled for x86-64-v3 (AVX2,
-/// FMA) and the generic target with the CPU's choice at the first call; the
-/// results are the same bits either way (nothing is fused into an FMA).
-/// Without `body_acc` the lane path skips the legs' `acc` (the general path
-/// needs them as it goes and fills them anyway).
+/// [`aba_passes`] compiled for x86-64-v3 (AVX2, FMA) and the generic target
+/// with the CPU's choice at the first call; the same bits either way
+/// (nothing is fused into an FMA).
 #[multiversion(targets("x86_64+avx2+fma"))]
-fn aba_passes(
+fn aba_compiled(model: &Model, data: &mut Data, v: &[f64], tau: &[f64], use_external: bool) {
+    aba_passes(model, data, v, tau, use_external);
+}
+
+/// ABA's three passes (Featherstone 2008, Table 7.1): fills `ddq` and the
+/// bodies' `acc` (true spatial accelerations).
+#[inline(always)]
+pub(crate) fn aba_passes(
     model: &Model,
     data: &mut Data,
     v: &[f64],
     tau: &[f64],
     use_external: bool,
-    body_acc: bool,
 ) {
-    // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
-    multiversion::target::match_target! {
-        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
-            return crate::leg_lanes::avx_call!(crate::leg_lanes::aba_passes_legs(
-                model, plan, data, v, tau, use_external, body_acc,
-            ));
-        },
-        _ => {},
-    }
-    // the general path keeps `acc` as it goes: it fills them either way
-    let _ = body_acc;
     let n = model.nbodies;
     let nv = model.nv;
     // Slices of known length up front, so that the loops below index

@@ -2,6 +2,7 @@
 
 use crate::data::Data;
 use crate::model::Model;
+use crate::plan::{LEGS, LegLanes};
 use crate::spatial::{Force, Motion, RigidInertia};
 use glam::DVec3;
 
@@ -87,37 +88,33 @@ pub fn com_and_velocity(model: &Model, data: &Data) -> (DVec3, DVec3) {
 /// path gives its bits: the lanes' sums where `data` holds them, otherwise the
 /// same sums in scalar code (`leg_mass_sums_scalar`), whatever filled the
 /// kinematics (robot batches, either build). Other models: [`com_and_velocity`].
-#[multiversion::multiversion(targets("x86_64+avx2+fma"))]
 pub fn com_and_velocity_by_legs(model: &Model, data: &Data) -> (DVec3, DVec3) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(plan) = &model.leg_lanes
-        && plan.leg_major
-        && model.nbodies == 1 + crate::leg_lanes::LEGS * plan.groups.len()
-    {
-        multiversion::target::match_target! {
-            "x86_64+avx2+fma" => if data.lanes.valid {
-                let sums = crate::leg_lanes::avx_call!(crate::leg_lanes::leg_mass_sums(data));
-                return add_base(model, data, &sums);
-            },
-            _ => {},
-        }
+    if let Some(plan) = by_legs(model) {
         return add_base(model, data, &leg_mass_sums_scalar(model, data, plan));
     }
     com_and_velocity(model, data)
 }
 
-/// [`crate::leg_lanes::leg_mass_sums`] leg by leg in scalar code, the same
+/// The legs' grouping when [`com_and_velocity_by_legs`] sums leg by leg:
+/// the four legs run in lanes and each leg's bodies are consecutive.
+#[inline]
+pub(crate) fn by_legs(model: &Model) -> Option<&LegLanes> {
+    model
+        .leg_lanes()
+        .filter(|plan| plan.leg_major && model.nbodies == 1 + LEGS * plan.groups.len())
+}
+
+/// The legs-in-lanes kernel's mass sums (`kernels::legs_x4`) leg by leg in scalar code, the same
 /// operations in the same order: per leg `k`, over its bodies in group
 /// order from `0.0`, `Σ m`, `Σ m c` and `Σ m (v + ω × c)`, as
 /// `[m, mc.x, mc.y, mc.z, p.x, p.y, p.z][k]`.
-#[cfg(target_arch = "x86_64")]
 pub(crate) fn leg_mass_sums_scalar(
     model: &Model,
     data: &Data,
-    plan: &crate::leg_lanes::LegLanes,
-) -> [[f64; crate::leg_lanes::LEGS]; 7] {
-    let mut out = [[0.0; crate::leg_lanes::LEGS]; 7];
-    for k in 0..crate::leg_lanes::LEGS {
+    plan: &LegLanes,
+) -> [[f64; LEGS]; 7] {
+    let mut out = [[0.0; LEGS]; 7];
+    for k in 0..LEGS {
         let (mut m, mut mc, mut p) = (0.0, DVec3::ZERO, DVec3::ZERO);
         for grp in &plan.groups {
             let i = grp[k];
@@ -136,17 +133,12 @@ pub(crate) fn leg_mass_sums_scalar(
 
 /// The CoM and its velocity from the legs' sums (`leg_mass_sums`' layout):
 /// the base's terms, then leg 0, …, leg 3 added in turn.
-#[cfg(target_arch = "x86_64")]
 #[inline]
-fn add_base(
-    model: &Model,
-    data: &Data,
-    legs: &[[f64; crate::leg_lanes::LEGS]; 7],
-) -> (DVec3, DVec3) {
+pub(crate) fn add_base(model: &Model, data: &Data, legs: &[[f64; LEGS]; 7]) -> (DVec3, DVec3) {
     let ri = data.body_inertia(model, 0);
     let mut m = ri.mass;
     let (mut mc, mut p) = com_terms(&ri, &data.vel[0]);
-    for k in 0..crate::leg_lanes::LEGS {
+    for k in 0..LEGS {
         m += legs[0][k];
         mc += DVec3::new(legs[1][k], legs[2][k], legs[3][k]);
         p += DVec3::new(legs[4][k], legs[5][k], legs[6][k]);
@@ -180,7 +172,7 @@ pub fn linear_momentum(model: &Model, data: &Data) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::forward_kinematics;
+    use crate::dispatch::forward_kinematics;
     use crate::model::BaseKind;
     use crate::robots::builtin;
 
@@ -222,19 +214,19 @@ mod tests {
     #[test]
     fn com_and_velocity_by_legs_is_the_same_sums_in_leg_order() {
         let (model, data) = moving_quad16(|i| (i * 0.9).cos() * 1.2);
-        let (c, vc) = com_and_velocity_by_legs(&model, &data);
+        let (c, vc) = crate::dispatch::com_and_velocity_by_legs(&model, &data);
         let (c0, vc0) = com_and_velocity(&model, &data);
         assert!(vc0.length() > 0.1, "the state moves: {vc0}");
         assert!((c - c0).length() <= 1e-14 * c0.length(), "{c} vs {c0}");
         assert!((vc - vc0).length() <= 1e-13 * vc0.length(), "{vc} vs {vc0}");
         #[cfg(target_arch = "x86_64")]
         {
-            let plan = model.leg_lanes.as_ref().expect("quad16's legs in lanes");
+            let plan = model.leg_lanes().expect("quad16's legs in lanes");
             let (cs, vcs) = add_base(&model, &data, &leg_mass_sums_scalar(&model, &data, plan));
             assert_eq!(c.to_array(), cs.to_array());
             assert_eq!(vc.to_array(), vcs.to_array());
             // the lanes were there to read, on a CPU with them
-            assert_eq!(data.lanes.valid, crate::leg_lanes::runs_on(&model));
+            assert_eq!(data.lanes.valid, crate::dispatch::runs_on(&model));
         }
     }
 }

@@ -2,56 +2,12 @@
 //! (Featherstone 2008, §6.2, Table 6.2, in the fixed frame, where composite
 //! inertias add without transforms).
 
-use crate::data::{BodyScratch, Data};
+use crate::data::Data;
 use crate::kinematics::forward_kinematics_pos;
 use crate::model::{JointType, Model, NO_PARENT};
+use crate::workspace::BodyScratch;
 
-/// The joint-space mass matrix (nv × nv, row-major, full symmetric),
-/// armature included on the diagonal. It lives in a buffer of the calling
-/// thread, lent while this value lives (it derefs to `[f64]`) and returned
-/// when it drops: read it and let it go. A robot's [`Data`] holds none (most
-/// steps need no mass matrix); holding two at once on one thread allocates.
-#[derive(Debug)]
-pub struct MassMatrix(Vec<f64>);
-
-thread_local! {
-    static MASS_MATRIX: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
-impl MassMatrix {
-    /// This thread's buffer, `n` zeros.
-    fn zeros(n: usize) -> MassMatrix {
-        let mut m = MASS_MATRIX.with(std::cell::RefCell::take);
-        m.clear();
-        m.resize(n, 0.0);
-        MassMatrix(m)
-    }
-
-    /// Sizes this thread's buffer for `model` (by [`Data::new`], so that
-    /// stepping on the thread allocates nothing).
-    pub(crate) fn reserve(model: &Model) {
-        drop(MassMatrix::zeros(model.nv * model.nv));
-    }
-}
-
-impl std::ops::Deref for MassMatrix {
-    type Target = [f64];
-    fn deref(&self) -> &[f64] {
-        &self.0
-    }
-}
-
-impl Drop for MassMatrix {
-    fn drop(&mut self) {
-        let m = std::mem::take(&mut self.0);
-        MASS_MATRIX.with(|cell| {
-            let mut held = cell.borrow_mut();
-            if held.capacity() < m.capacity() {
-                *held = m;
-            }
-        });
-    }
-}
+pub use crate::workspace::MassMatrix;
 
 /// The mass matrix at `q` (see [`MassMatrix`]).
 pub fn crba(model: &Model, data: &mut Data, q: &[f64]) -> MassMatrix {

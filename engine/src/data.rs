@@ -5,15 +5,17 @@
 //! world-fixed point [`Data::origin`] that coincides with the base origin when
 //! [`crate::kinematics::forward_kinematics`] last ran.
 
+use crate::kernels::legs_x4::workspace::{LaneKinematics, reserve_group_aba};
 use crate::model::Model;
-use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
+use crate::spatial::{Force, Motion, RigidInertia, Transform};
+use crate::workspace::{BodyScratch, MassMatrix};
 use glam::DVec3;
 
 /// Workspace and outputs of the algorithms, grouped by the stage that writes them.
 /// What holds nothing from one call to the next (ABA's and CRBA's per-body
 /// workspace, the legs-in-lanes ABA's per-group one, the mass matrix, RK4's
-/// stages) is one per thread instead (`BodyScratch`,
-/// [`crate::crba::MassMatrix`]), not one per robot.
+/// stages) is one per thread instead ([`crate::workspace`]), not one per
+/// robot.
 #[derive(Clone, Debug)]
 pub struct Data {
     // --- kinematics (forward_kinematics) ---
@@ -24,16 +26,10 @@ pub struct Data {
     /// Spatial velocity of each body, reference frame (nbodies).
     pub vel: Vec<Motion>,
     /// Motion subspace column of each 1-DOF body, reference frame (nbodies;
-    /// base unused). Read through [`Data::subspace`]: while the legs' lane
-    /// cache is valid, the legs' entries here are stale (forward kinematics
-    /// in lanes keeps them only in the lanes, saving the scatter).
+    /// base unused).
     pub(crate) s: Vec<Motion>,
     /// Each body's rigid inertia in the reference frame (CoM relative to `origin`)
-    /// (nbodies; empty in a kinematics-only `Data`). Read through
-    /// [`Data::body_inertia`]: while the legs' lane cache is valid, the legs'
-    /// entries here are stale (forward kinematics in lanes keeps their
-    /// inertias only in the lanes, saving the scatter, ~300 instructions per
-    /// call for quad16).
+    /// (nbodies; empty in a kinematics-only `Data`).
     pub(crate) inertia_ref: Vec<RigidInertia>,
 
     // --- dynamics (rnea / aba / crba) ---
@@ -73,9 +69,10 @@ pub struct Data {
     /// the same state (observation, then the integrator's first stage) is
     /// skipped: see [`crate::kinematics::forward_kinematics`].
     pub(crate) kin: KinematicsKey,
-    /// The legs' `s` and `inertia_ref` in lanes, for ABA and RNEA in
-    /// lanes (see [`crate::leg_lanes`]).
-    pub(crate) lanes: crate::leg_lanes::LaneKinematics,
+    /// A copy of the legs' `s`, `inertia_ref` and `vel` in lanes, for ABA,
+    /// RNEA and the mass sums in lanes ([`crate::kernels::legs_x4`]); the
+    /// per-body arrays hold the same values.
+    pub(crate) lanes: LaneKinematics,
 }
 
 /// The state the kinematic fields of a [`Data`] hold: the model's address,
@@ -96,10 +93,9 @@ impl Data {
     /// allocates nothing from the first step).
     pub fn new(model: &Model) -> Data {
         BodyScratch::take(model.nbodies).give_back();
-        crate::crba::MassMatrix::reserve(model);
-        #[cfg(target_arch = "x86_64")]
-        if let Some(plan) = &model.leg_lanes {
-            crate::leg_lanes::reserve_workspace(plan);
+        MassMatrix::reserve(model.nv);
+        if let Some(legs) = model.leg_lanes() {
+            reserve_group_aba(legs.groups.len());
         }
         Data::allocate(model, true)
     }
@@ -144,7 +140,10 @@ impl Data {
                 v: vec![0.0; nv],
                 level: 0,
             },
-            lanes: crate::leg_lanes::LaneKinematics::new(model, dynamics),
+            lanes: LaneKinematics::new(match model.leg_lanes() {
+                Some(legs) if dynamics => legs.groups.len(),
+                _ => 0,
+            }),
         }
     }
 
@@ -216,50 +215,24 @@ impl Data {
     /// inertias) hold [`crate::kinematics::forward_kinematics`] at `(q, v)` of
     /// `model`, bit for bit (what its cache checks).
     pub fn kinematics_hold(&self, model: &Model, q: &[f64], v: &[f64]) -> bool {
-        crate::kinematics::kinematics_level(model, self, q, Some(v)) == 2
+        kinematics_level(model, self, q, Some(v)) == 2
     }
 
     /// Body `i`'s rigid inertia in the reference frame (CoM relative to
     /// `origin`), after [`crate::kinematics::forward_kinematics`] on `model`
-    /// (with the dynamics arrays: not in a kinematics-only `Data`). The legs'
-    /// inertias come from the lane cache when forward kinematics left them
-    /// there only (see `inertia_ref`).
+    /// (with the dynamics arrays: not in a kinematics-only `Data`).
     #[inline(always)]
     pub fn body_inertia(&self, model: &Model, i: usize) -> RigidInertia {
-        #[cfg(target_arch = "x86_64")]
-        if let Some((g, k)) = self.cached_lane(model, i) {
-            return self.lanes.groups[g].inertia_lane(k);
-        }
+        let _ = model;
         self.inertia_ref[i]
     }
 
     /// Body `i`'s motion subspace column (reference frame; `i` not the
-    /// base), after [`crate::kinematics::forward_kinematics`] on `model`. The
-    /// legs' come from the lane cache when forward kinematics left them
-    /// there only (see `s`).
+    /// base), after [`crate::kinematics::forward_kinematics`] on `model`.
     #[inline(always)]
     pub fn subspace(&self, model: &Model, i: usize) -> Motion {
-        #[cfg(target_arch = "x86_64")]
-        if let Some((g, k)) = self.cached_lane(model, i) {
-            return self.lanes.groups[g].s_lane(k);
-        }
+        let _ = model;
         self.s[i]
-    }
-
-    /// Body `i`'s (group, lane) in the lane cache while the cache holds the
-    /// kinematics forward kinematics left there only; `None` for the base,
-    /// for a model without legs in lanes, or when the cache is stale.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn cached_lane(&self, model: &Model, i: usize) -> Option<(usize, usize)> {
-        if self.lanes.valid
-            && let Some(plan) = &model.leg_lanes
-            && let Some(&(g, k)) = plan.slot.get(i)
-            && g != usize::MAX
-        {
-            return Some((g, k));
-        }
-        None
     }
 
     /// Column `k` (0..6, for `v[k]`) of the free base's motion subspace,
@@ -279,30 +252,11 @@ impl Data {
 
     /// `f(i, inertia)` for every body `i` in increasing order, with
     /// [`Data::body_inertia`]'s inertias: for a sum over the bodies in their
-    /// order (centre of mass, momentum) read every step. Where the legs'
-    /// lanes hold them and each leg's bodies are consecutive (quad16), lane
-    /// by lane without looking each body up.
+    /// order (centre of mass, momentum) read every step.
     #[inline(always)]
     pub fn for_each_body_inertia(&self, model: &Model, mut f: impl FnMut(usize, RigidInertia)) {
-        #[cfg(target_arch = "x86_64")]
-        if self.lanes.valid
-            && let Some(plan) = &model.leg_lanes
-            && plan.leg_major
-            && model.nbodies == 1 + crate::leg_lanes::LEGS * plan.groups.len()
-        {
-            f(0, self.inertia_ref[0]);
-            let groups = &self.lanes.groups[..plan.groups.len()];
-            let mut i = 1;
-            for k in 0..crate::leg_lanes::LEGS {
-                for gk in groups {
-                    f(i, gk.inertia_lane(k));
-                    i += 1;
-                }
-            }
-            return;
-        }
         for i in 0..model.nbodies {
-            f(i, self.body_inertia(model, i));
+            f(i, self.inertia_ref[i]);
         }
     }
 
@@ -378,26 +332,6 @@ impl Data {
     }
 }
 
-/// ABA's and CRBA's per-body workspace (reference frame, nbodies each): it
-/// holds nothing from one call to the next, so it is one per thread, not one
-/// per robot's [`Data`]. Sized to the largest model the thread has run
-/// (allocating on a thread's first call only).
-#[derive(Debug, Default)]
-pub(crate) struct BodyScratch {
-    /// Articulated (ABA) or composite (CRBA) inertia of each body.
-    pub(crate) ia: Vec<Sym6>,
-    /// Articulated bias force (ABA).
-    pub(crate) pa: Vec<Force>,
-    /// `U = Iᴬ S` for each 1-DOF body (ABA).
-    pub(crate) u: Vec<Force>,
-    /// `1 / D`, `D = Sᵀ U + armature` (ABA).
-    pub(crate) d_inv: Vec<f64>,
-    /// `u = τ − Sᵀ pᴬ` (ABA).
-    pub(crate) u_tau: Vec<f64>,
-    /// Velocity-product acceleration `cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ` (ABA).
-    pub(crate) c: Vec<Motion>,
-}
-
 /// Most spare workspaces ([`Data::with_spare`]) a thread keeps.
 const MAX_SPARES: usize = 8;
 
@@ -415,31 +349,21 @@ thread_local! {
     static SPARE_KINEMATICS: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-thread_local! {
-    static BODY_SCRATCH: std::cell::RefCell<BodyScratch> =
-        std::cell::RefCell::new(BodyScratch::default());
-}
-
-impl BodyScratch {
-    /// This thread's workspace with at least `nbodies` entries per array,
-    /// lent until [`BodyScratch::give_back`]. Every algorithm writes an entry
-    /// before reading it: what it held before does not matter.
-    pub(crate) fn take(nbodies: usize) -> BodyScratch {
-        let mut s = BODY_SCRATCH.with(std::cell::RefCell::take);
-        if s.ia.len() < nbodies {
-            s.ia.resize(nbodies, Sym6::ZERO);
-            s.pa.resize(nbodies, Force::ZERO);
-            s.u.resize(nbodies, Force::ZERO);
-            s.d_inv.resize(nbodies, 0.0);
-            s.u_tau.resize(nbodies, 0.0);
-            s.c.resize(nbodies, Motion::ZERO);
-        }
-        s
+/// How much of `data`'s kinematics is valid for `(model, q, v)`: 2 poses and
+/// velocities, 1 poses only, 0 nothing. States compare bit for bit, so a
+/// skipped call gives exactly what computing again would.
+#[inline]
+pub(crate) fn kinematics_level(model: &Model, data: &Data, q: &[f64], v: Option<&[f64]>) -> u8 {
+    let k = &data.kin;
+    let same = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    };
+    if k.level == 0 || k.model != model as *const Model as usize || !same(&k.q, q) {
+        return 0;
     }
-
-    /// Returns the workspace to this thread.
-    pub(crate) fn give_back(self) {
-        BODY_SCRATCH.with(|cell| drop(cell.replace(self)));
+    match v {
+        Some(v) if k.level == 2 && same(&k.v, v) => 2,
+        _ => 1,
     }
 }
 
@@ -453,9 +377,9 @@ fn body_bit(body: usize) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::forward_kinematics;
+    use crate::dispatch::forward_kinematics;
+    use crate::dispatch::rnea;
     use crate::model::BaseKind;
-    use crate::rnea::rnea;
     use crate::robots::{builtin, nominal_q};
 
     fn model(name: &str, scale_mass: f64) -> Model {

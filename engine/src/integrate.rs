@@ -22,15 +22,15 @@
 //! a floating base `ṗ = R v_lin` and `q̇uat = ½ quat ⊗ (0, ω)` with `v_lin`, `ω`
 //! in the base frame; joints `q̇ = v`.
 
-use crate::aba::aba_ddq_from_kinematics;
 use crate::actuator_model::ActuatorBank;
 use crate::crba::crba_from_kinematics;
 use crate::data::Data;
-use crate::kinematics::forward_kinematics;
+use crate::dispatch::aba_ddq_from_kinematics;
+use crate::dispatch::forward_kinematics;
+use crate::dispatch::rnea_from_kinematics;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
 use crate::model::Model;
 use crate::passive::{PassiveParams, add_passive_torques, saturate};
-use crate::rnea::rnea_from_kinematics;
 use glam::{DQuat, DVec3};
 
 /// Fixed-step integrator.

@@ -29,36 +29,12 @@ fn joint_transform(jt: JointType, axis: DVec3, qi: f64) -> Transform {
 /// (not in a kinematics-only [`Data`]) and sets `origin`.
 ///
 /// After this call, [`Data::origin`] is the base origin and every spatial
-/// quantity refers to it.
+/// quantity refers to it. The scalar path, whatever the model's plan
+/// ([`crate::dispatch::forward_kinematics_pos`] picks the plan's kernel).
 pub fn forward_kinematics_pos(model: &Model, data: &mut Data, q: &[f64]) {
     debug_assert_eq!(q.len(), model.nq);
-    if kinematics_level(model, data, q, None) >= 1 {
-        return;
-    }
+    data.invalidate_kinematics();
     poses(model, data, q, None);
-    let k = &mut data.kin;
-    k.model = model as *const Model as usize;
-    k.q.clear();
-    k.q.extend_from_slice(q);
-    k.level = 1;
-}
-
-/// How much of `data`'s kinematics is valid for `(model, q, v)`: 2 poses and
-/// velocities, 1 poses only, 0 nothing. States compare bit for bit, so a
-/// skipped call gives exactly what computing again would.
-#[inline]
-pub(crate) fn kinematics_level(model: &Model, data: &Data, q: &[f64], v: Option<&[f64]>) -> u8 {
-    let k = &data.kin;
-    let same = |a: &[f64], b: &[f64]| {
-        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-    };
-    if k.level == 0 || k.model != model as *const Model as usize || !same(&k.q, q) {
-        return 0;
-    }
-    match v {
-        Some(v) if k.level == 2 && same(&k.v, v) => 2,
-        _ => 1,
-    }
 }
 
 /// Body poses, motion subspaces and inertias in the reference frame and,
@@ -70,14 +46,18 @@ pub(crate) fn kinematics_level(model: &Model, data: &Data, q: &[f64], v: Option<
 /// (three-operand instructions) and packs independent operations.
 #[multiversion(targets("x86_64+avx2+fma"))]
 fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
-    let n = model.nbodies;
+    base_kinematics(model, data, q, v);
+    body_kinematics(model, data, q, v);
+}
+
+/// The base's part of forward kinematics: `origin`, `pose[0]`,
+/// `inertia_ref[0]` (with the dynamics arrays) and, with `v`, `vel[0]`.
+#[inline(always)]
+pub(crate) fn base_kinematics(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = base_pose(model, q);
     data.origin = base.trans;
-    // (set again by the legs in lanes when they fill it)
-    data.lanes.valid = false;
-    let origin = base.trans;
     data.pose[0] = base;
-    let step = &model.pose_step[..n];
+    let step = &model.pose_step[..model.nbodies];
     let base_rot = Transform::new(base.rot, DVec3::ZERO);
     // (a kinematics-only `Data` has no reference inertias)
     if let Some(ir) = data.inertia_ref.first_mut() {
@@ -86,14 +66,16 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     if let Some(v) = v {
         data.vel[0] = base_velocity_at(model, base.rot, v);
     }
-    // quad16's shape with AVX: the four legs in SIMD lanes, the same bits
-    multiversion::target::match_target! {
-        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
-            crate::leg_lanes::avx_call!(crate::leg_lanes::poses_legs(plan, data, q, v));
-            return;
-        },
-        _ => {},
-    }
+}
+
+/// Every body but the base, parents first (after [`base_kinematics`]):
+/// `pose`, `s`, `inertia_ref` (with the dynamics arrays) and, with `v`,
+/// `vel` (Featherstone 2008, §4.1; the fixed-frame form of §7.3).
+#[inline(always)]
+pub(crate) fn body_kinematics(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
+    let n = model.nbodies;
+    let origin = data.origin;
+    let step = &model.pose_step[..n];
     // Slices of known length up front, so that the loop indexes without
     // bounds checks (the body arrays all have `n` entries, `parent[i] < i`).
     let (parent, idx_q, idx_v) = (&model.parent[..n], &model.idx_q[..n], &model.idx_v[..n]);
@@ -155,7 +137,7 @@ fn poses(model: &Model, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
 
 /// The base's pose from `q` (the identity for a fixed base).
 #[inline(always)]
-fn base_pose(model: &Model, q: &[f64]) -> Transform {
+pub(crate) fn base_pose(model: &Model, q: &[f64]) -> Transform {
     match model.joint_type[0] {
         JointType::Free => {
             let r = DMat3::from_quat(base_quat(q));
@@ -165,46 +147,10 @@ fn base_pose(model: &Model, q: &[f64]) -> Transform {
     }
 }
 
-/// The world position and velocity of one point on the last body of each
-/// of the four legs, at `(q, v)`: `points[k]` is in the frame of
-/// `model.leg_lanes`' last group's body `k`. The same bits as
-/// [`Data::body_point_world`] and [`Data::body_point_velocity`] after
-/// [`forward_kinematics`], without any other body's pose, subspace or
-/// velocity stored (the chains stay in AVX registers). `None` where the
-/// legs do not run in lanes (no leg plan, or a CPU without AVX2 and FMA):
-/// the caller then runs the full kinematics.
-#[multiversion(targets("x86_64+avx2+fma"))]
-pub fn leg_end_points(
-    model: &Model,
-    q: &[f64],
-    v: &[f64],
-    points: [DVec3; 4],
-) -> Option<([DVec3; 4], [DVec3; 4])> {
-    multiversion::target::match_target! {
-        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes {
-            let base = base_pose(model, q);
-            let vel0 = base_velocity_at(model, base.rot, v);
-            return Some(crate::leg_lanes::avx_call!(crate::leg_lanes::leg_end_points(
-                plan, &base, base.trans, vel0, q, v, points,
-            )));
-        },
-        _ => {},
-    }
-    let _ = (model, q, v, points);
-    None
-}
-
-/// Whether a diagonal inertia is turned by [`RigidInertia::transformed_diagonal`]
-/// (27 products instead of 45). Off: its results differ from the full product
-/// in the last bits, and quad16's trot over sine waves (`tests/trot_sine.rs`)
-/// and its step-up and in-place pronk (`engine/tests/walking.rs`) fall with
-/// last-bit changes to the dynamics; on once those gaits are robust to them.
-pub(crate) const DIAGONAL_INERTIA_SHORTCUT: bool = false;
-
 /// A body's inertia seen through `x`, by the shortcut its [`PoseStep`] allows.
 #[inline(always)]
 fn rigid_inertia_in(inertia: &RigidInertia, step: PoseStep, x: &Transform) -> RigidInertia {
-    if DIAGONAL_INERTIA_SHORTCUT && step.inertia_diagonal {
+    if crate::model::DIAGONAL_INERTIA_SHORTCUT && step.inertia_diagonal {
         inertia.transformed_diagonal(x)
     } else {
         inertia.transformed(x)
@@ -226,54 +172,24 @@ fn rotate_about_axis(rot: DMat3, k: usize, angle: f64) -> DMat3 {
     }
 }
 
-/// Poses and velocities: [`forward_kinematics_pos`] plus `vel` (reference frame).
-///
-/// Repeated calls at the same `(model, q, v)` (bit for bit) return at once:
-/// the observation stage and the integrator's first stage share one
-/// evaluation.
+/// Poses and velocities: [`forward_kinematics_pos`] plus `vel` (reference
+/// frame). The scalar path ([`crate::dispatch::forward_kinematics`] picks
+/// the plan's kernel and skips a repeated call at the same state).
 pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) {
     debug_assert_eq!(q.len(), model.nq);
     debug_assert_eq!(v.len(), model.nv);
-    match kinematics_level(model, data, q, Some(v)) {
-        2 => return,
-        1 => {
-            // poses are valid for q: velocities only (the lane cache's
-            // subspaces and inertias stay valid; its velocities follow)
-            data.vel[0] = base_velocity(model, data, v);
-            for i in 1..model.nbodies {
-                data.vel[i] =
-                    data.vel[model.parent[i]] + data.subspace(model, i) * v[model.idx_v[i]];
-            }
-            #[cfg(target_arch = "x86_64")]
-            if data.lanes.valid
-                && let Some(plan) = &model.leg_lanes
-            {
-                crate::leg_lanes::refresh_lane_velocities(plan, data);
-            }
-        }
-        _ => {
-            poses(model, data, q, Some(v));
-            let k = &mut data.kin;
-            k.model = model as *const Model as usize;
-            k.q.clear();
-            k.q.extend_from_slice(q);
-        }
-    }
-    let k = &mut data.kin;
-    k.v.clear();
-    k.v.extend_from_slice(v);
-    k.level = 2;
+    data.invalidate_kinematics();
+    poses(model, data, q, Some(v));
 }
 
-/// [`forward_kinematics`] without recording `(q, v)` as the state `data`
-/// holds: its cache then says nothing is valid, so a later call computes
-/// again. For a workspace nothing reads afterwards (the estimator's
-/// per-thread spare) the two copies of the state are saved.
-pub fn forward_kinematics_unrecorded(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) {
-    debug_assert_eq!(q.len(), model.nq);
-    debug_assert_eq!(v.len(), model.nv);
-    poses(model, data, q, Some(v));
-    data.kin.level = 0;
+/// Velocities only, after the poses at the same `q`: `vel` from `v` and the
+/// subspaces already in `data`.
+#[inline]
+pub(crate) fn body_velocities(model: &Model, data: &mut Data, v: &[f64]) {
+    data.vel[0] = base_velocity(model, data, v);
+    for i in 1..model.nbodies {
+        data.vel[i] = data.vel[model.parent[i]] + data.subspace(model, i) * v[model.idx_v[i]];
+    }
 }
 
 /// The base's spatial velocity in the reference frame from `v[0..6]` (zero for a fixed base).
@@ -284,7 +200,7 @@ pub fn base_velocity(model: &Model, data: &Data, v: &[f64]) -> Motion {
 
 /// [`base_velocity`] with the base's orientation `r`.
 #[inline]
-fn base_velocity_at(model: &Model, r: DMat3, v: &[f64]) -> Motion {
+pub(crate) fn base_velocity_at(model: &Model, r: DMat3, v: &[f64]) -> Motion {
     if model.joint_type[0] == JointType::Free {
         Motion::new(
             r * DVec3::new(v[0], v[1], v[2]),

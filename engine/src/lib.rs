@@ -14,7 +14,8 @@
 //! | nonlinear effects, gravity | [`nle`] | `nle`, `gravity` |
 //! | ABA (forward dynamics) | [`aba`] | `ddq` |
 //! | kinematics + ABA for 4 robots of one model in SIMD lanes | [`batch`] | `BatchData::ddq` |
-//! | kinematics and ABA of one robot with its 4 legs in AVX lanes, chosen inside [`kinematics`] and [`aba`] for quad16's shape (same bits) | [`leg_lanes`] | the same fields |
+//! | kinematics, ABA and RNEA of one robot with its 4 legs in AVX lanes (same bits), for the model's [`plan::Plan::LegsX4`] | [`kernels::legs_x4`] | the same fields |
+//! | one entry point per algorithm, matching on the model's plan | [`dispatch`] | the same fields |
 //! | point Jacobians | [`jacobian`] | `jacobian` |
 //! | CoM, momentum | [`com`] | (returns) |
 //! | energies | [`energy`] | (returns) |
@@ -30,28 +31,33 @@ pub mod control;
 pub mod crba;
 pub mod data;
 pub mod description;
+pub mod dispatch;
 pub mod divergence;
 pub mod energy;
 pub mod estimation;
 pub mod gait;
 pub mod integrate;
 pub mod jacobian;
+pub mod kernels;
 pub mod kinematics;
-pub mod leg_lanes;
 pub mod legs;
 pub mod linalg;
+pub mod material;
 pub mod metrics;
 pub mod model;
 pub mod nle;
 pub mod passive;
 pub mod payload;
+pub mod plan;
 pub mod rnea;
 pub mod robots;
+pub mod rounding;
 pub mod sensors;
 pub mod spatial;
 pub mod support;
 pub mod terrain;
 pub mod trig;
+pub mod workspace;
 
 pub use data::Data;
 pub use model::{BaseKind, Model, ModelError};

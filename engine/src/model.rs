@@ -14,7 +14,7 @@
 //! (the URDF document order).
 
 use crate::description::{JointKind, RobotDescription};
-use crate::leg_lanes::LegLanes;
+use crate::plan::{LEGS, LegLanes, Plan};
 use crate::spatial::{RigidInertia, Transform};
 use glam::{DMat3, DVec3};
 use thiserror::Error;
@@ -206,10 +206,95 @@ pub struct Model {
     /// body in decreasing index, as `(1..n).rev()` does, so sums over
     /// children keep their order.
     pub depth_order: Vec<usize>,
-    /// The legs' bodies grouped by depth, one SIMD lane per leg, when the
-    /// model is a base with four unbranched chains of one length (quad16):
-    /// ABA then runs its legs in lanes ([`crate::leg_lanes`]).
-    pub leg_lanes: Option<LegLanes>,
+    /// How the algorithms run for this model ([`crate::dispatch`]): its
+    /// four legs in lanes where its shape allows ([`Plan::LegsX4`]), else
+    /// [`Plan::Scalar`]. Decided when the model is compiled.
+    pub plan: Plan,
+}
+
+/// Whether a diagonal inertia is turned by [`RigidInertia::transformed_diagonal`]
+/// (27 products instead of 45). Off: its results differ from the full product
+/// in the last bits, and quad16's trot over sine waves (`tests/trot_sine.rs`)
+/// and its step-up and in-place pronk (`engine/tests/walking.rs`) fall with
+/// last-bit changes to the dynamics; on once those gaits are robust to them.
+pub(crate) const DIAGONAL_INERTIA_SHORTCUT: bool = false;
+
+impl Model {
+    /// The legs' grouping when the model runs its four legs in lanes
+    /// ([`Plan::LegsX4`]).
+    pub fn leg_lanes(&self) -> Option<&LegLanes> {
+        match &self.plan {
+            Plan::LegsX4(legs) => Some(legs),
+            Plan::Scalar => None,
+        }
+    }
+}
+
+/// The grouping of `m`'s legs for [`Plan::LegsX4`], when every body but the
+/// base is on one of four unbranched chains from the base, all of one
+/// length, and the four joints at each depth are revolute about the same
+/// signed unit axis of their joint frames with the same placement shortcuts
+/// (quad16, quad12); `None` otherwise, and on other architectures than
+/// x86-64 (the scalar path then runs).
+fn leg_lanes(m: &Model) -> Option<LegLanes> {
+    let n = m.nbodies;
+    if !cfg!(target_arch = "x86_64")
+        || DIAGONAL_INERTIA_SHORTCUT
+        || n < 1 + LEGS
+        || !(n - 1).is_multiple_of(LEGS)
+        || m.depth_order.len() != n - 1
+        || m.pose_step.len() != n
+    {
+        return None;
+    }
+    let groups: Vec<[usize; LEGS]> = m
+        .depth_order
+        .chunks_exact(LEGS)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect();
+    for (g, grp) in groups.iter().enumerate() {
+        let first = m.pose_step[grp[0]];
+        first.aligned_axis?;
+        for (k, &i) in grp.iter().enumerate() {
+            let want_parent = if g == 0 { 0 } else { groups[g - 1][k] };
+            let st = m.pose_step[i];
+            if m.parent[i] != want_parent
+                || m.joint_type[i] != JointType::Revolute
+                || st.aligned_axis != first.aligned_axis
+                || st.placement_rotates != first.placement_rotates
+                || st.placement_translates != first.placement_translates
+            {
+                return None;
+            }
+        }
+    }
+    // Each body of group g − 1 is then the parent of exactly one body of
+    // group g (the same lane), so every chain is unbranched.
+    let ng = groups.len();
+    let leg_major = groups
+        .iter()
+        .enumerate()
+        .all(|(g, grp)| grp.iter().enumerate().all(|(k, &i)| i == 1 + k * ng + g));
+    Some(LegLanes {
+        #[cfg(target_arch = "x86_64")]
+        steps: groups
+            .iter()
+            .map(|grp| {
+                let st = m.pose_step[grp[0]];
+                crate::plan::GroupStep::new(&crate::plan::GroupBodies {
+                    placement: grp.map(|i| m.placement[i]),
+                    inertia: grp.map(|i| m.inertia[i]),
+                    axis: st.aligned_axis.expect("checked above"),
+                    rotates: st.placement_rotates,
+                    translates: st.placement_translates,
+                    idx_q: grp.map(|i| m.idx_q[i]),
+                    idx_v: grp.map(|i| m.idx_v[i]),
+                })
+            })
+            .collect(),
+        groups,
+        leg_major,
+    })
 }
 
 /// The shortcuts of forward kinematics for one body, decided once per model
@@ -355,7 +440,7 @@ impl Model {
             load_nv: 0,
             pose_step: Vec::new(),
             depth_order: Vec::new(),
-            leg_lanes: None,
+            plan: Plan::Scalar,
         };
 
         // Movable joints take q/v slots in document order, whatever the body order.
@@ -511,7 +596,10 @@ impl Model {
         }
         m.depth_order = (1..m.nbodies).collect();
         m.depth_order.sort_by_key(|&i| (depth[i], i));
-        m.leg_lanes = LegLanes::of(&m);
+        m.plan = match leg_lanes(&m) {
+            Some(legs) => Plan::LegsX4(legs),
+            None => Plan::Scalar,
+        };
         Ok(m)
     }
 
@@ -553,7 +641,7 @@ impl Model {
             // derived from the fields above when the model is compiled
             pose_step: _,
             depth_order: _,
-            leg_lanes: _,
+            plan: _,
         } = self;
         *nq == other.nq
             && *nv == other.nv

@@ -25,6 +25,15 @@ pub fn rnea_from_kinematics(
     a: &[f64],
     use_external: bool,
 ) {
+    rnea_base(model, data, a, use_external);
+    rnea_bodies(model, data, v, a, use_external);
+    rnea_base_wrench(model, data);
+}
+
+/// The base's acceleration `acc[0]` (gravity as a fictitious upward
+/// acceleration) and its own force `f[0]`, before the bodies' passes.
+#[inline]
+pub(crate) fn rnea_base(model: &Model, data: &mut Data, a: &[f64], use_external: bool) {
     let a0 = base_acceleration(model, data, a);
     data.acc[0] = a0;
     data.f[0] = data.inertia_ref[0].mul_motion(a0)
@@ -32,7 +41,12 @@ pub fn rnea_from_kinematics(
     if use_external {
         data.f[0] -= data.f_ext[0];
     }
-    rnea_bodies(model, data, v, a, use_external);
+}
+
+/// A floating base's `tau[0..6]` from its total force `f[0]`, after the
+/// bodies' passes.
+#[inline]
+pub(crate) fn rnea_base_wrench(model: &Model, data: &mut Data) {
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
             data.tau[k] = data.base_subspace(k).dot(data.f[0]);
@@ -44,7 +58,7 @@ pub fn rnea_from_kinematics(
 /// fictitious upward acceleration (Featherstone §5.3) plus, on a free base,
 /// its own acceleration `a[..6]` through the base's motion subspace.
 #[inline]
-fn base_acceleration(model: &Model, data: &Data, a: &[f64]) -> Motion {
+pub(crate) fn base_acceleration(model: &Model, data: &Data, a: &[f64]) -> Motion {
     let mut a0 = Motion::new(-model.gravity, glam::DVec3::ZERO);
     if model.joint_type[0] == JointType::Free {
         for k in 0..6 {
@@ -70,53 +84,18 @@ pub fn rnea_joint_torques_from_kinematics(
 ) {
     let nv0 = model.base_nv();
     assert_eq!(tau_joints.len(), model.nv - nv0, "one torque per joint");
-    data.acc[0] = base_acceleration(model, data, a);
-    if !rnea_joint_torques_in_lanes(model, data, v, a, tau_joints) {
-        rnea_from_kinematics(model, data, v, a, false);
-        tau_joints.copy_from_slice(&data.tau[nv0..]);
-    }
+    rnea_from_kinematics(model, data, v, a, false);
+    tau_joints.copy_from_slice(&data.tau[nv0..]);
 }
 
-/// [`rnea_joint_torques_from_kinematics`]'s legs in lanes, after the base's
-/// acceleration `data.acc[0]` is set, where the model's shape and the CPU
-/// allow (then `true`), as [`rnea_bodies`] dispatches.
 #[multiversion(targets("x86_64+avx2+fma"))]
-fn rnea_joint_torques_in_lanes(
+pub(crate) fn rnea_bodies(
     model: &Model,
     data: &mut Data,
     v: &[f64],
     a: &[f64],
-    tau_joints: &mut [f64],
-) -> bool {
-    multiversion::target::match_target! {
-        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
-            && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
-        {
-            crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_passes_legs::<false>(model, plan, data, v, a, false, tau_joints));
-            return true;
-        },
-        _ => {},
-    }
-    let _ = (model, data, v, a, tau_joints);
-    false
-}
-
-/// RNEA's two passes over the bodies after the base's (its acceleration and
-/// own force set; the children's forces are added to it here), compiled for
-/// x86-64-v3 (AVX2, FMA) and the generic target with the CPU's choice at the
-/// first call. quad16's shape with AVX runs the four legs in SIMD lanes
-/// ([`crate::leg_lanes`]); the same bits either way (the same operations in
-/// the same order, nothing fused into an FMA).
-#[multiversion(targets("x86_64+avx2+fma"))]
-fn rnea_bodies(model: &Model, data: &mut Data, v: &[f64], a: &[f64], use_external: bool) {
-    multiversion::target::match_target! {
-        "x86_64+avx2+fma" => if let Some(plan) = &model.leg_lanes
-            && plan.groups.len() <= crate::leg_lanes::RNEA_MAX_GROUPS
-        {
-            return crate::leg_lanes::avx_call!(crate::leg_lanes::rnea_passes_legs::<true>(model, plan, data, v, a, use_external, &mut []));
-        },
-        _ => {},
-    }
+    use_external: bool,
+) {
     for i in 1..model.nbodies {
         let p = model.parent[i];
         let iv = model.idx_v[i];

@@ -1,6 +1,6 @@
 //! Sine and cosine of joint angles for every kinematics path: one answer,
 //! [`libm::sincos`] (FreeBSD msun / fdlibm, error < 1 ulp), computed one value
-//! at a time ([`sin_cos`]) or four at a time in SIMD lanes ([`sin_cos_x4`],
+//! at a time ([`sin_cos`]) or four at a time in SIMD lanes (`kernels::sin_cos_x4`,
 //! [`sin_cos_lanes`]) with **the same bits** in every lane.
 //!
 //! Why not `f64::sin_cos`: std calls the platform's libm (glibc's `sincos`,
@@ -30,8 +30,6 @@
 //! Accuracy against std (glibc, correctly rounded in practice): at most
 //! 1 ulp apart for |x| ≤ 2²⁰·π/2 ≈ 1.6·10⁶ rad (test
 //! `within_one_ulp_of_std`).
-
-use multiversion::multiversion;
 
 // msun's constants by their bits (e_rem_pio2.c, k_sin.c, k_cos.c).
 /// 1.5·2⁵²: adding it rounds a double of magnitude < 2⁵¹ to an integer.
@@ -153,8 +151,8 @@ fn select(m: f64, a: f64, b: f64) -> f64 {
 /// |x| < 2²⁰·π/2 where it needs no second reduction round, [`libm::sincos`]
 /// itself for the other lanes. Inlined into its caller: in an AVX2 function
 /// LLVM turns the arithmetic into `f64x4` instructions but leaves parts of the
-/// lane-mask logic scalar, so [`sin_cos_x4`] and the legs' lanes run the same
-/// operations as AVX intrinsics instead (`leg_lanes`' `F4::sin_cos`, 134
+/// lane-mask logic scalar, so `kernels::sin_cos_x4` and the legs' lanes run the same
+/// operations as AVX intrinsics instead (`kernels::f64x4`'s `F4::sin_cos`, 134
 /// instructions for four angles; glibc's `sincos` takes ~110 for one). This
 /// plain-Rust form serves the robot-lanes batch, the generic build and, with
 /// `L` = 1, as the reference the tests hold every path to.
@@ -250,28 +248,14 @@ pub fn sin_cos_lanes<const L: usize>(x: [f64; L]) -> ([f64; L], [f64; L]) {
 }
 
 /// `(sin x, cos x)`: [`libm::sincos`], the value every lane of
-/// [`sin_cos_x4`] and [`sin_cos_lanes`] gives for `x`.
+/// `kernels::sin_cos_x4` and [`sin_cos_lanes`] gives for `x`.
 #[inline]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     libm::sincos(x)
 }
 
-/// Sine and cosine of four angles at once, bit for bit [`sin_cos`] of each.
-///
-/// Compiled for x86-64-v3 (AVX2), where it runs the legs' AVX lanes
-/// (`leg_lanes`' `F4::sin_cos`: the operations of [`sin_cos_lanes`] as AVX
-/// intrinsics), and for the generic target ([`sin_cos_lanes`]); the CPU picks
-/// one at the first call. The same bits either way: no fused multiply–add.
-#[multiversion(targets("x86_64+avx2+fma"))]
-pub fn sin_cos_x4(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
-    multiversion::target::match_target! {
-        "x86_64+avx2+fma" => crate::leg_lanes::avx_call!(crate::leg_lanes::sin_cos_avx(x)),
-        _ => sin_cos_lanes(x),
-    }
-}
-
 /// Whether the dynamics' forward kinematics — the general path
-/// ([`crate::kinematics`]), the legs in AVX lanes ([`crate::leg_lanes`]) and
+/// ([`crate::kinematics`]), the legs in AVX lanes (`kernels::legs_x4`) and
 /// the robots in lanes ([`crate::batch`]), all alike — and the integrator's
 /// base rotation ([`crate::integrate::integrate_q`]) take their sines and
 /// cosines from this module (libm's bits) instead of std's `f64::sin_cos`
@@ -377,7 +361,7 @@ pub(crate) mod tests {
     /// dispatched x4 version.
     fn check4(x: [f64; 4]) {
         let (s, c) = sin_cos_lanes(x);
-        let (s4, c4) = sin_cos_x4(x);
+        let (s4, c4) = crate::kernels::sin_cos_x4(x);
         let (s1, c1) = sin_cos_lanes([x[0]]);
         assert_libm_bits(x, s, c);
         for k in 0..4 {

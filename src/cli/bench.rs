@@ -401,7 +401,7 @@ impl Build {
         }
         Build {
             static_features,
-            lanes_on_this_cpu: quadsim_engine::leg_lanes::cpu_has_lanes(),
+            lanes_on_this_cpu: quadsim_engine::kernels::cpu_has_lanes(),
         }
     }
 

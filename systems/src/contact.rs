@@ -7,9 +7,9 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 use quadsim_components::{RobotBatch, RobotSim, SimClock, SimThreadPool};
 use quadsim_engine::Data;
-use quadsim_engine::com::com_and_velocity_by_legs;
 use quadsim_engine::contact::{ContactKind, update_after_step};
-use quadsim_engine::kinematics::forward_kinematics;
+use quadsim_engine::dispatch::com_and_velocity_by_legs;
+use quadsim_engine::dispatch::forward_kinematics;
 use quadsim_engine::metrics::FootSample;
 use quadsim_engine::terrain::{Terrain as _, TerrainUnion};
 

@@ -16,8 +16,8 @@ use quadsim_engine::Data;
 use quadsim_engine::contact::evaluate;
 use quadsim_engine::control::prescribed::PrescribedMode;
 use quadsim_engine::control::walker::WalkerInput;
+use quadsim_engine::dispatch::forward_kinematics;
 use quadsim_engine::integrate::State;
-use quadsim_engine::kinematics::forward_kinematics;
 
 /// Runs every robot's controller on controller ticks: the `Control` stage
 /// over the whole herd as a system of its own (the step schedule runs it

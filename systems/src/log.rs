@@ -43,7 +43,8 @@ use quadsim_components::{
 };
 use quadsim_engine::contact::{ContactEval, evaluate};
 use quadsim_engine::description::RobotDescription;
-use quadsim_engine::kinematics::{forward_kinematics, frame_pose};
+use quadsim_engine::dispatch::forward_kinematics;
+use quadsim_engine::kinematics::frame_pose;
 use quadsim_engine::model::JointType;
 use quadsim_engine::spatial::{Transform, rpy_from_rot};
 use quadsim_engine::{Data, Model};

@@ -2,7 +2,8 @@
 
 use bevy_ecs::prelude::*;
 use quadsim_components::{FootContact, LinkPose, PoseSync, RobotBatch, SimClock, SimThreadPool};
-use quadsim_engine::kinematics::{forward_kinematics_pos, frame_pose};
+use quadsim_engine::dispatch::forward_kinematics_pos;
+use quadsim_engine::kinematics::frame_pose;
 
 /// Run condition: poses are due after this step (rate or request, see [`PoseSync`]).
 pub fn pose_sync_due(clock: Res<SimClock>, sync: Res<PoseSync>) -> bool {

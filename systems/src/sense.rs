@@ -9,8 +9,9 @@ use bevy_ecs::prelude::*;
 use glam::DVec3;
 use quadsim_components::{RobotBatch, RobotSim, SimClock, SimThreadPool};
 use quadsim_engine::contact::update_after_step;
+use quadsim_engine::dispatch::forward_kinematics;
 use quadsim_engine::estimation::EstimatorInput;
-use quadsim_engine::kinematics::{base_quat, forward_kinematics};
+use quadsim_engine::kinematics::base_quat;
 use quadsim_engine::sensors::{SensorTruth, SensorUpdates};
 use quadsim_engine::terrain::Terrain as _;
 

@@ -177,7 +177,7 @@ fn rigid_inertia_in<const L: usize>(
     step: PoseStep,
     x: &LTransform<L>,
 ) -> LInertia<L> {
-    if crate::kinematics::DIAGONAL_INERTIA_SHORTCUT && step.inertia_diagonal {
+    if crate::model::DIAGONAL_INERTIA_SHORTCUT && step.inertia_diagonal {
         LInertia::transformed_diagonal(inertia, x)
     } else {
         LInertia::transformed(inertia, x)

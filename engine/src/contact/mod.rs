@@ -30,13 +30,14 @@
 //! material point; for a rolling foot sphere the spring thus resists rolling
 //! until it slips, a small rolling resistance of order `k_t r θ`.
 
+pub mod error;
 pub mod friction;
 pub mod law;
-pub mod presets;
 pub mod stability;
 
+pub use crate::material::{GroundMaterial, GroundPreset};
+pub use error::ContactError;
 pub use law::NormalLaw;
-pub use presets::{GroundMaterial, GroundPreset};
 pub use stability::{StabilityWarning, check_stability};
 
 use crate::data::Data;
@@ -46,33 +47,6 @@ use crate::model::Model;
 use crate::spatial::{Force, Motion};
 use crate::terrain::{TerrainHit, TerrainUnion};
 use glam::DVec3;
-use thiserror::Error;
-
-/// Errors in contact parameters.
-#[derive(Debug, Error, Clone, PartialEq)]
-pub enum ContactError {
-    /// A ground preset name that does not exist.
-    #[error("unknown ground preset '{0}' (known: concrete, grass, mud, sand)")]
-    UnknownPreset(String),
-    /// A number out of its domain.
-    #[error("ground material: field '{field}' = {value} is invalid ({why})")]
-    InvalidValue {
-        /// Field name.
-        field: &'static str,
-        /// The value.
-        value: f64,
-        /// What is wrong.
-        why: &'static str,
-    },
-    /// A contact point on a body the model does not have, or a bad radius.
-    #[error("contact point {index}: {why}")]
-    InvalidPoint {
-        /// Index of the point.
-        index: usize,
-        /// What is wrong.
-        why: String,
-    },
-}
 
 /// What part of the robot a contact point belongs to; a torso or knee
 /// touching the ground is a fall.

@@ -8,7 +8,7 @@
 //! `v̇ = −(b/m) v` diverges past 2). Nonlinear laws are checked with their
 //! tangent stiffness at the static depth under `m g`, `g` = 9.81 m/s².
 
-use super::presets::GroundMaterial;
+use crate::material::GroundMaterial;
 use crate::model::STANDARD_GRAVITY;
 
 /// Which time scale the step fails to resolve.
@@ -168,7 +168,7 @@ pub fn contact_apparent_masses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::presets::GroundPreset;
+    use crate::material::GroundPreset;
 
     /// Concrete under a 7 kg foot load: ω = √(1e5/7) ≈ 119.5 rad/s, so 1 ms
     /// passes (ω dt ≈ 0.12) and 5 ms fails (≈ 0.60); b dt/m crosses 1 at 7 ms.

@@ -2,8 +2,8 @@
 //! feed-forward that carries the robot's weight on its feet.
 
 use crate::data::Data;
+use crate::dispatch::forward_kinematics_pos;
 use crate::jacobian::add_point_force_jt;
-use crate::kinematics::forward_kinematics_pos;
 use crate::model::Model;
 use crate::nle::generalized_gravity;
 use glam::DVec3;
@@ -45,7 +45,7 @@ pub fn bandwidth_gains(
     bandwidth_hz: f64,
     damping_ratio: f64,
 ) -> (Vec<f64>, Vec<f64>) {
-    let m = crate::crba::crba(model, data, q);
+    let m = crate::dispatch::crba(model, data, q);
     let w = std::f64::consts::TAU * bandwidth_hz;
     let nv = model.nv;
     let b = model.base_nv();

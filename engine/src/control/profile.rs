@@ -20,7 +20,7 @@
 
 use crate::data::Data;
 use crate::description::RobotDescription;
-use crate::kinematics::forward_kinematics_pos;
+use crate::dispatch::forward_kinematics_pos;
 use crate::legs::{AnkleMode, FootPoint, HipKind, IkOptions, LegKinematics};
 use crate::model::Model;
 use glam::DVec3;
@@ -183,7 +183,7 @@ impl RobotProfile {
         let mass = self.total_mass_kg / nf as f64;
         let k_leg = mass * model.gravity.length() / (sink_fraction * self.stance_base_height_m);
         let diag: Vec<f64> = {
-            let m = crate::crba::crba(model, &mut data, q);
+            let m = crate::dispatch::crba(model, &mut data, q);
             (b..nv).map(|i| m[i * nv + i]).collect()
         };
         forward_kinematics_pos(model, &mut data, q);

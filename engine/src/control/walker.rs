@@ -43,7 +43,7 @@ use crate::gait::placement::{PlacementInput, PlacementParams, foot_target_world,
 use crate::gait::scheduler::{GaitScheduler, LegPhase, SchedulerParams};
 use crate::gait::swing::ReachDown;
 use crate::gait::{Gait, GaitError};
-use crate::leg_lanes::{Quad16Legs, legs_ik};
+use crate::kernels::legs_x4::{Quad16Legs, legs_ik};
 use crate::legs::ik::IkOptions;
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
@@ -697,7 +697,7 @@ impl Walker {
         input: &WalkerInput<'_>,
         tau_joints: &mut [f64],
     ) {
-        crate::kinematics::forward_kinematics(model, data, q, v);
+        crate::dispatch::forward_kinematics(model, data, q, v);
         self.tick_at_kinematics(model, data, q, v, input, tau_joints);
     }
 
@@ -716,9 +716,8 @@ impl Walker {
         input: &WalkerInput<'_>,
         tau_joints: &mut [f64],
     ) {
-        debug_assert_eq!(
-            crate::kinematics::kinematics_level(model, data, q, Some(v)),
-            2,
+        debug_assert!(
+            data.kinematics_hold(model, q, v),
             "tick_at_kinematics needs data's kinematics at (q, v)"
         );
         let nl = self.legs.len();
@@ -941,7 +940,7 @@ impl Walker {
 
         // 4. inverse dynamics with the base held still
         //    (the kinematics at (q, v) are in `data` since the tick began)
-        crate::rnea::rnea_joint_torques_from_kinematics(
+        crate::dispatch::rnea_joint_torques_from_kinematics(
             model,
             data,
             v,
@@ -1450,7 +1449,7 @@ mod tests {
         let mut tau = [vec![0.0; model.nv], vec![0.0; model.nv]];
         for k in 0..4_000 {
             for (r, (walker, st, states, data, ws)) in robots.iter_mut().enumerate() {
-                crate::kinematics::forward_kinematics(&model, data, &st.q, &st.v);
+                crate::dispatch::forward_kinematics(&model, data, &st.q, &st.v);
                 crate::contact::update_after_step(&points, data, &terrain, states);
                 if k % 4 == 0 {
                     let contacts: Vec<bool> = states.iter().map(|s| s.in_contact).collect();

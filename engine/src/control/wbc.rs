@@ -250,7 +250,7 @@ impl WholeBody {
             return Err(WbcError::TooManyContacts);
         }
         // h(q, v) and the bodies' bias accelerations (q̈ = 0): one RNEA pass.
-        crate::rnea::rnea_from_kinematics(model, data, v, &self.zeros, false);
+        crate::dispatch::rnea_from_kinematics(model, data, v, &self.zeros, false);
         self.h.copy_from_slice(&data.tau);
         // M(q), its factor and inverse
         {

@@ -20,9 +20,8 @@ use glam::{DMat3, DQuat, DVec3};
 
 use crate::contact::ContactPoint;
 use crate::data::Data;
-use crate::kinematics::{
-    base_quat, forward_kinematics, forward_kinematics_unrecorded, leg_end_points,
-};
+use crate::dispatch::{forward_kinematics, forward_kinematics_unrecorded, leg_end_points};
+use crate::kinematics::base_quat;
 use crate::model::Model;
 use crate::sensors::MocapSample;
 use crate::terrain::{Terrain, TerrainUnion};
@@ -279,7 +278,7 @@ impl BaseEstimator {
     /// [`Model::leg_lanes`], the lane of each foot and each lane's foot
     /// point (in its body's frame), for [`leg_end_points`].
     fn lanes_of_feet(&self, model: &Model) -> Option<([usize; KF_FEET], [DVec3; KF_FEET])> {
-        let last = model.leg_lanes.as_ref()?.groups.last()?;
+        let last = model.leg_lanes()?.groups.last()?;
         if self.feet.len() != KF_FEET {
             return None;
         }

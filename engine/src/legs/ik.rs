@@ -149,12 +149,12 @@ pub(crate) fn cis(theta: f64) -> DVec2 {
     DVec2::new(c, s)
 }
 
-/// `e^{iθ}` of four angles at once ([`crate::trig::sin_cos_x4`]; the same
+/// `e^{iθ}` of four angles at once ([`crate::kernels::sin_cos_x4`]; the same
 /// bits as [`cis`] of each).
 #[inline]
 pub(crate) fn cis4(theta: [f64; 4]) -> [DVec2; 4] {
     if crate::trig::LEGS_USE_LIBM {
-        let (s, c) = crate::trig::sin_cos_x4(theta);
+        let (s, c) = crate::kernels::sin_cos_x4(theta);
         [0, 1, 2, 3].map(|k| DVec2::new(c[k], s[k]))
     } else {
         theta.map(cis)
@@ -207,7 +207,7 @@ pub fn wrap_angle(a: f64) -> f64 {
     use std::f64::consts::{PI, TAU};
     // `round` without its library call on the baseline x86-64 target
     // (three to four per leg IK): the same bits for every input
-    let w = a - TAU * crate::sensors::noise::round_half_away(a / TAU);
+    let w = a - TAU * crate::rounding::round_half_away(a / TAU);
     if w <= -PI { w + TAU } else { w }
 }
 

@@ -30,6 +30,7 @@
 //! [`nominal_base_height_m`], [`nominal_q`]): the joint angles of a stable
 //! stand and the base height that puts the feet' contact points on the ground.
 
+pub mod links;
 pub mod params;
 pub mod quad12;
 pub mod quad16;
@@ -37,11 +38,10 @@ pub mod quad16;
 pub use params::{Domain, ParamError, ParamSpec};
 
 use crate::Data;
-use crate::description::{Geometry, LinkDesc, RobotDescription, Shape};
+use crate::description::{RobotDescription, Shape};
 use crate::kinematics::{forward_kinematics_pos, frame_pose};
 use crate::model::{BaseKind, Model, ModelError};
-use crate::spatial::Transform;
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 use params::Values;
 
 const NAMES: &[&str] = &[quad16::NAME, quad12::NAME];
@@ -85,44 +85,6 @@ pub fn builtin_with(name: &str, overrides: &[(&str, f64)]) -> Result<RobotDescri
         quad12::NAME => Ok(quad12::build(&values)),
         _ => Err(unknown()),
     }
-}
-
-/// A link with a given mass, CoM and inertia, and one shape used for both
-/// collision and display.
-pub(crate) fn solid_link(name: String, mass_kg: f64, shape: Shape, at: DVec3) -> LinkDesc {
-    let inertia = shape.solid_inertia(mass_kg).unwrap_or(DMat3::ZERO);
-    let geom = Geometry {
-        origin: Transform::from_translation(at),
-        shape,
-    };
-    LinkDesc {
-        name,
-        mass_kg,
-        com_m: at,
-        inertia_kgm2: Some(inertia),
-        collision: vec![geom.clone()],
-        visual: vec![geom],
-    }
-}
-
-/// The `torso` link of both robots: a solid box of `torso.size_{x,y,z}_m`
-/// centred on the base frame, its mass following the box volume unless
-/// `torso.mass_kg` is given.
-pub(crate) fn box_torso(p: &Values) -> LinkDesc {
-    let size = DVec3::new(
-        p.get("torso.size_x_m"),
-        p.get("torso.size_y_m"),
-        p.get("torso.size_z_m"),
-    );
-    let volume_ratio =
-        p.ratio("torso.size_x_m") * p.ratio("torso.size_y_m") * p.ratio("torso.size_z_m");
-    let mass = p.mass_following("torso.mass_kg", volume_ratio);
-    solid_link(
-        "torso".into(),
-        mass,
-        Shape::Box { size_m: size },
-        DVec3::ZERO,
-    )
 }
 
 /// Nominal standing joint angles (rad, q order, one entry per movable joint),

@@ -82,7 +82,7 @@
 //! prescribed trot's foot-strike peaks show unclipped). The speed limit,
 //! 6 rad/s (0.17 s per 60°), is the same class's speed at 6 V.
 
-use super::box_torso;
+use super::links::box_torso;
 use super::params::{Domain, ParamSpec, Values};
 use crate::description::{Geometry, JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
 use crate::spatial::{Transform, rot_from_rpy};

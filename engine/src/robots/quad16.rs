@@ -56,8 +56,8 @@
 //! 14 rad/s on average and 21 rad/s at the peak of a sinusoidal profile; 30 rad/s
 //! leaves a margin above that.
 
+use super::links::{box_torso, solid_link};
 use super::params::{Domain, ParamSpec, Values};
-use super::{box_torso, solid_link};
 use crate::description::{JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
 use crate::spatial::Transform;
 use glam::{DMat3, DVec3};

@@ -33,7 +33,7 @@ pub mod heightfield;
 pub mod noise;
 pub mod union;
 
-use crate::contact::GroundMaterial;
+use crate::material::GroundMaterial;
 use glam::{DVec2, DVec3};
 use thiserror::Error;
 

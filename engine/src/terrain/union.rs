@@ -12,7 +12,7 @@
 //!   patch owns; stones and box obstacles own only their own footprints).
 
 use super::{SurfacePoint, Terrain, TerrainPatch};
-use crate::contact::GroundMaterial;
+use crate::material::GroundMaterial;
 use glam::DVec3;
 
 /// The infinite plane used where no patch covers the ground.

@@ -2,86 +2,13 @@
 //! AVX lane per leg. Each statement mirrors the general path's (named in
 //! comments).
 
-use super::LEGS;
-use super::LegLanes;
-use super::x4::{F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer};
+use super::workspace::{GroupAba, GroupKinematics, give_back_group_aba, take_group_aba};
 use crate::data::Data;
+use crate::kernels::f64x4::{F4, Force4, Inertia4, M3, Motion4, Sym6x4, Transform4, V3, outer};
 use crate::model::{JointType, Model};
+use crate::plan::{GroupStep, LEGS, LegLanes};
 use crate::spatial::{Force, Motion, RigidInertia, Sym6, Transform};
 use glam::DVec3;
-
-/// One group's constants (the same [`crate::model::PoseStep`] shortcuts hold
-/// for its four bodies).
-#[derive(Clone, Debug)]
-pub(crate) struct GroupStep {
-    /// Joint placements in the parent bodies.
-    placement: Transform4,
-    /// The placements' rotations are not the identity (else their product is skipped).
-    rotates: bool,
-    /// The placements' translations are not zero (else their product is skipped).
-    translates: bool,
-    /// The joints turn about ±(this unit axis) of their joint frames...
-    axis: usize,
-    /// ...with this sign.
-    sign: f64,
-    /// Each body's inertia in its own frame.
-    inertia: Inertia4,
-    /// Each joint's index in q.
-    idx_q: [usize; LEGS],
-    /// Each joint's index in v.
-    pub(super) idx_v: [usize; LEGS],
-}
-
-impl GroupStep {
-    /// The constants of the bodies `grp` of `m` (checked by [`LegLanes::of`]).
-    pub(crate) fn of(m: &Model, grp: &[usize; LEGS]) -> GroupStep {
-        let st = m.pose_step[grp[0]];
-        let (axis, sign) = st.aligned_axis.expect("checked by LegLanes::of");
-        let pl = grp.map(|i| m.placement[i]);
-        let ri = grp.map(|i| m.inertia[i]);
-        GroupStep {
-            placement: Transform4::new(
-                M3::from_lanes(pl.map(|t| t.rot)),
-                V3::from_lanes(pl.map(|t| t.trans)),
-            ),
-            rotates: st.placement_rotates,
-            translates: st.placement_translates,
-            axis,
-            sign,
-            inertia: Inertia4 {
-                mass: F4::from_array(ri.map(|r| r.mass)),
-                com: V3::from_lanes(ri.map(|r| r.com)),
-                inertia_com: M3::from_lanes(ri.map(|r| r.inertia_com)),
-            },
-            idx_q: grp.map(|i| m.idx_q[i]),
-            idx_v: grp.map(|i| m.idx_v[i]),
-        }
-    }
-}
-
-/// One group's motion subspace, reference inertia and velocity as
-/// [`poses_legs`] computed them in lanes (kept in [`Data`]'s lane cache).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct GroupKinematics {
-    s: Motion4,
-    inertia: Inertia4,
-    /// The velocities (for [`leg_mass_sums`]; 768 bytes a quad16).
-    v: Motion4,
-}
-
-impl GroupKinematics {
-    /// Lane `k`'s motion subspace.
-    #[inline(always)]
-    pub(crate) fn s_lane(&self, k: usize) -> Motion {
-        self.s.lane(k)
-    }
-
-    /// Lane `k`'s reference inertia.
-    #[inline(always)]
-    pub(crate) fn inertia_lane(&self, k: usize) -> RigidInertia {
-        self.inertia.lane(k)
-    }
-}
 
 /// The motions `m[i]` of the bodies `grp` in lanes, element by element (no
 /// copies of whole structs).
@@ -160,20 +87,6 @@ pub(super) fn group_kinematics(
         gather_kinematics(grp, data)
     };
     (s, inertia, v)
-}
-
-/// What ABA's last pass needs of one group, kept from the inward pass (one
-/// per thread: it holds nothing between calls).
-#[derive(Clone, Copy, Debug, Default)]
-struct GroupAba {
-    /// `U = Iᴬ S`.
-    u: Force4,
-    /// `1 / D`.
-    d_inv: F4,
-    /// `u = τ − Sᵀ pᴬ`.
-    u_tau: F4,
-    /// Velocity-product acceleration.
-    c: Motion4,
 }
 
 /// Panics unless the four joint indices are below `nv`: one branch instead
@@ -281,12 +194,11 @@ pub(crate) fn leg_end_points(
 /// base's (`data.pose[0]`, `data.origin` and, with `v`, `data.vel[0]` set):
 /// poses, motion subspaces, inertias (unless `data` is kinematics-only) and
 /// velocities of every leg body. Poses and velocities go to the per-body
-/// arrays. With velocities and inertias, the groups' subspaces and inertias
-/// stay in `data`'s lane cache, for ABA and RNEA in lanes, and (when RNEA
-/// takes its lanes too) only there: `Data::subspace` and
-/// `Data::body_inertia` read them back, and the scatter into `s` and
-/// `inertia_ref` (about 250 instructions per call for quad16) is saved.
-/// Otherwise they go to the per-body arrays.
+/// arrays, and so do the subspaces and inertias: every field forward
+/// kinematics fills is valid after it, whichever path ran. With velocities
+/// and inertias, the groups' subspaces, inertias and velocities are also
+/// kept in `data`'s lane cache, for ABA, RNEA and the mass sums in lanes
+/// (no gather).
 #[target_feature(enable = "avx")]
 pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<&[f64]>) {
     let base = data.pose[0];
@@ -313,10 +225,6 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
     let cache = &mut data.lanes.groups;
     let fill = with_inertia && v.is_some() && cache.len() == ng;
     let cache = &mut cache[..if fill { ng } else { 0 }];
-    // The legs' inertias in the lanes only when every reader on this CPU
-    // reads them there (`Data::body_inertia`, ABA and RNEA in lanes; RNEA
-    // takes the general path beyond its group limit).
-    let lanes_only = fill && ng <= RNEA_MAX_GROUPS;
     for (g, (grp, st)) in plan.groups.iter().zip(&plan.steps).enumerate() {
         let bodies = *grp;
         assert!(bodies.iter().all(|&i| i < n), "leg bodies within the model");
@@ -325,11 +233,9 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
         for k in 0..LEGS {
             pose[bodies[k]] = xs[k];
         }
-        if !lanes_only {
-            let ss = s.lanes();
-            for k in 0..LEGS {
-                s_all[bodies[k]] = ss[k];
-            }
+        let ss = s.lanes();
+        for k in 0..LEGS {
+            s_all[bodies[k]] = ss[k];
         }
         if fill {
             cache[g].s = s;
@@ -340,15 +246,13 @@ pub(crate) fn poses_legs(plan: &LegLanes, data: &mut Data, q: &[f64], v: Option<
             if fill {
                 cache[g].inertia = inertia;
             }
-            if !lanes_only {
-                let (mass, com, ic) = (
-                    inertia.mass.to_array(),
-                    inertia.com.lanes(),
-                    inertia.inertia_com.lanes(),
-                );
-                for k in 0..LEGS {
-                    ir[bodies[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
-                }
+            let (mass, com, ic) = (
+                inertia.mass.to_array(),
+                inertia.com.lanes(),
+                inertia.inertia_com.lanes(),
+            );
+            for k in 0..LEGS {
+                ir[bodies[k]] = RigidInertia::new(mass[k], com[k], ic[k]);
             }
         }
         if let Some(v) = v {
@@ -566,7 +470,7 @@ pub(crate) fn aba_passes_legs(
         let aa = rt * a0_true.ang;
         data.ddq[..6].copy_from_slice(&[al.x, al.y, al.z, aa.x, aa.y, aa.z]);
     }
-    GROUP_ABA.with(|cell| drop(cell.replace((work_all, kin_all))));
+    give_back_group_aba((work_all, kin_all));
 }
 
 /// `Iᴬ v` for one group, `ia` read from memory. Like [`downdate_into`] it
@@ -742,34 +646,4 @@ pub(crate) fn rnea_passes_legs<const FULL: bool>(
             data.f[0] += fl[k];
         }
     }
-}
-
-/// A thread's ABA workspace: the groups' terms from pass 2 to pass 3, and
-/// room for their kinematics when the lane cache does not hold them.
-type AbaWorkspace = (Vec<GroupAba>, Vec<GroupKinematics>);
-
-thread_local! {
-    static GROUP_ABA: std::cell::RefCell<AbaWorkspace> = const {
-        std::cell::RefCell::new((Vec::new(), Vec::new()))
-    };
-}
-
-/// This thread's ABA workspace of `ng` groups (every entry is written
-/// before it is read), lent until given back.
-fn take_group_aba(ng: usize) -> AbaWorkspace {
-    let (mut w, mut k) = GROUP_ABA.with(std::cell::RefCell::take);
-    if w.len() < ng {
-        w.resize(ng, GroupAba::default());
-    }
-    if k.len() < ng {
-        k.resize(ng, GroupKinematics::default());
-    }
-    (w, k)
-}
-
-/// Sizes this thread's ABA workspace for `plan` (by `Data::new`, so that
-/// stepping on the thread allocates nothing).
-pub(crate) fn reserve_workspace(plan: &LegLanes) {
-    let w = take_group_aba(plan.groups.len());
-    GROUP_ABA.with(|cell| drop(cell.replace(w)));
 }

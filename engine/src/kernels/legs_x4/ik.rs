@@ -12,10 +12,10 @@
 //! lane: every lane is the scalar solve's result **bit for bit** (unit test
 //! below, on targets inside, outside and under the legs' reach).
 
-use super::x4::{F4, M3, V3};
+use crate::kernels::f64x4::{F4, M3, V3};
 use crate::legs::Quad16Leg;
 use crate::legs::quad16_leg::foot_arg;
-use crate::sensors::noise::{HALF_DOWN, TWO_52};
+use crate::rounding::{HALF_DOWN, TWO_52};
 use core::arch::x86_64::{_CMP_GE_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ};
 use glam::{DVec2, DVec3};
 use std::f64::consts::{PI, TAU};

@@ -1,96 +1,27 @@
-//! One robot's forward kinematics and ABA with its **legs in SIMD lanes**:
-//! for a base carrying four unbranched chains of identical shape — quad16's
-//! legs — the four bodies at each depth are one group of four f64 lanes in
-//! an AVX register, and the base stays scalar.
+//! One robot's forward kinematics, ABA, RNEA and leg IK with its **legs in
+//! SIMD lanes** ([`crate::plan::Plan::LegsX4`]): for a base carrying four
+//! unbranched chains of identical shape — quad16's and quad12's legs — the
+//! four bodies at each depth are one group of four f64 lanes in an AVX
+//! register (`kernels::f64x4`), and the base stays scalar.
 //!
 //! The per-robot passes spend their time in short dependent chains of
 //! 3-vector and 3×3 arithmetic, one body after another; the four legs' chains
 //! are independent, so one AVX instruction can do the same operation for all
-//! four. The lane types (`x4`) repeat the scalar formulas operation for
-//! operation (same products, same order of sums, the same additions of exact
-//! zeros, no fused multiply–add), each lane gets the bits of the scalar kinematics' sine and cosine, and
-//! the base receives its children's terms in the scalar order (decreasing body
-//! index): every output is **bit-identical** to the general path of
-//! [`crate::kinematics`] and [`crate::aba`] (tests below and
-//! `engine/tests/batch.rs`, which compares the robot-lanes batch with it).
+//! four. Every output is **bit-identical** to the scalar path (the kernel
+//! contract, [`crate::kernels`]): the lane types repeat the scalar formulas
+//! operation for operation, each lane gets the bits of the scalar
+//! kinematics' sine and cosine, and the base receives its children's terms in
+//! the scalar order (decreasing body index).
 //!
-//! Used from the x86-64-v3 clones of the dispatched passes only (the lane
-//! code needs AVX); other CPUs and architectures run the general path, with
-//! the same bits.
+//! Called from the x86-64-v3 clones of [`crate::dispatch`]'s functions only
+//! (the lane code needs AVX); other CPUs and architectures run the scalar
+//! path, with the same bits.
 
-/// Calls one of this module's AVX functions from a `match_target!` arm for
-/// `"x86_64+avx2+fma"`. In the portable build that arm runs inside
-/// multiversion's x86-64-v3 clone, where the call is safe. A build for a CPU
-/// with AVX2 and FMA (`RUSTFLAGS="-C target-cpu=native"` or `x86-64-v3`)
-/// skips the dispatch and runs the arm in a function without
-/// `#[target_feature]`, where Rust still asks for `unsafe`, although that
-/// binary cannot run on a CPU without those features.
-macro_rules! avx_call {
-    ($call:expr) => {{
-        // SAFETY: the build's static target features include AVX2 and FMA,
-        // so every CPU it runs on has the AVX these functions need.
-        #[cfg(all(target_feature = "avx2", target_feature = "fma"))]
-        #[allow(unsafe_code, unused_unsafe)]
-        let r = unsafe { $call };
-        #[cfg(not(all(target_feature = "avx2", target_feature = "fma")))]
-        let r = $call;
-        r
-    }};
-}
-pub(crate) use avx_call;
-
-#[cfg(target_arch = "x86_64")]
-mod avx;
 #[cfg(target_arch = "x86_64")]
 mod ik;
 #[cfg(target_arch = "x86_64")]
-mod x4;
-
-#[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{
-    GroupKinematics, GroupStep, RNEA_MAX_GROUPS, aba_passes_legs, leg_end_points, leg_mass_sums,
-    poses_legs, refresh_lane_velocities, reserve_workspace, rnea_passes_legs,
-};
-
-use crate::model::{JointType, Model};
-
-/// The legs' motion subspaces and reference inertias as
-/// [`poses_legs`] computed them, in its lanes (one entry per group), instead
-/// of in the per-body arrays: ABA and RNEA in lanes read them here without
-/// gathering, and the few per-body readers through [`crate::Data::subspace`]
-/// and [`crate::Data::body_inertia`] (the velocities are in `vel` only:
-/// 768 bytes per quad16 fewer).
-#[derive(Clone, Debug, Default)]
-pub(crate) struct LaneKinematics {
-    /// The entries hold the legs' subspaces and inertias, which the
-    /// per-body arrays `s` and `inertia_ref` of the same [`crate::Data`]
-    /// then need not hold (read through [`crate::Data::subspace`] and
-    /// [`crate::Data::body_inertia`]): set by a forward
-    /// kinematics with velocities and inertias in lanes, cleared by every
-    /// other write of the poses (kinematics without lanes, velocities or
-    /// inertias, [`crate::Data::invalidate_kinematics`]).
-    pub(crate) valid: bool,
-    /// One per group of the model's [`LegLanes`] (none in a kinematics-only
-    /// `Data` or without lanes).
-    #[cfg(target_arch = "x86_64")]
-    pub(crate) groups: Vec<GroupKinematics>,
-}
-
-impl LaneKinematics {
-    /// Room for `model`'s groups when `dynamics` (ABA and RNEA can run on
-    /// the `Data`) and the legs run in lanes; empty otherwise.
-    pub(crate) fn new(model: &Model, dynamics: bool) -> LaneKinematics {
-        let _ = (model, dynamics);
-        LaneKinematics {
-            valid: false,
-            #[cfg(target_arch = "x86_64")]
-            groups: match &model.leg_lanes {
-                Some(plan) if dynamics => vec![GroupKinematics::default(); plan.groups.len()],
-                _ => Vec::new(),
-            },
-        }
-    }
-}
+pub(crate) mod passes;
+pub(crate) mod workspace;
 
 /// quad16's four legs in lanes for the closed-form IK ([`legs_ik`]); an
 /// empty stand-in off x86-64.
@@ -104,6 +35,7 @@ pub(crate) struct Quad16Legs;
 
 #[cfg(not(target_arch = "x86_64"))]
 impl Quad16Legs {
+    /// No lanes off x86-64.
     pub(crate) fn new(_: [&crate::legs::Quad16Leg; 4]) -> Option<Quad16Legs> {
         None
     }
@@ -124,7 +56,7 @@ pub(crate) fn legs_ik(
     multiversion::target::match_target! {
         "x86_64+avx2+fma" => if let crate::legs::AnkleMode::FootPitch(psi) = opts.ankle {
             let sign = opts.knee.sign(crate::legs::quad16_leg::NOMINAL_BEND);
-            return Some(avx_call!(ik::solve(legs, targets, psi, sign)));
+            return Some(crate::kernels::avx_call!(ik::solve(legs, targets, psi, sign)));
         },
         _ => {},
     }
@@ -132,125 +64,11 @@ pub(crate) fn legs_ik(
     None
 }
 
-/// [`crate::trig::sin_cos_x4`] on AVX: four sines and cosines in one register.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-#[target_feature(enable = "avx")]
-pub(crate) fn sin_cos_avx(x: [f64; 4]) -> ([f64; 4], [f64; 4]) {
-    let (s, c) = x4::F4::from_array(x).sin_cos();
-    (s.to_array(), c.to_array())
-}
-
-/// Legs per group: four f64 lanes fill one AVX register.
-pub const LEGS: usize = 4;
-
-/// The legs' bodies grouped by depth, decided once per model when the model
-/// is compiled, with what forward kinematics needs of each group in lanes.
-#[derive(Clone, Debug)]
-pub struct LegLanes {
-    /// `groups[g][k]`: the body at depth `g + 1` of leg `k`; legs in
-    /// increasing index of their first body, as [`Model::depth_order`] has them.
-    pub groups: Vec<[usize; LEGS]>,
-    /// Per group: the joints' placements, axis and the bodies' inertias in lanes.
-    #[cfg(target_arch = "x86_64")]
-    pub(crate) steps: Vec<GroupStep>,
-    /// Per body: its group and lane (`usize::MAX` for the base), for reading
-    /// one body's entry of the lane cache.
-    #[cfg(target_arch = "x86_64")]
-    pub(crate) slot: Vec<(usize, usize)>,
-    /// Whether each leg's bodies are consecutive: body `1 + k·G + g` is
-    /// group `g`'s lane `k` (`G` groups).
-    #[cfg(target_arch = "x86_64")]
-    pub(crate) leg_major: bool,
-}
-
-/// Whether ABA runs `m`'s four legs in lanes on this CPU: `m` has their
-/// shape ([`Model::leg_lanes`]) and the CPU has AVX2 and FMA, the clone
-/// ABA's dispatch takes the lanes in.
-pub fn runs_on(m: &Model) -> bool {
-    m.leg_lanes.is_some() && cpu_has_lanes()
-}
-
-/// Whether this CPU has what the lanes' clones need (AVX2 and FMA).
-#[cfg(target_arch = "x86_64")]
-pub fn cpu_has_lanes() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-}
-
-/// No lanes off x86-64.
-#[cfg(not(target_arch = "x86_64"))]
-pub fn cpu_has_lanes() -> bool {
-    false
-}
-
-impl LegLanes {
-    /// The grouping of `m`, when every body but the base is on one of four
-    /// unbranched chains from the base, all of one length, and the four
-    /// joints at each depth are revolute about the same signed unit axis of
-    /// their joint frames with the same placement shortcuts (quad16); `None`
-    /// otherwise, and on other architectures than x86-64 (the general path
-    /// then runs).
-    pub fn of(m: &Model) -> Option<LegLanes> {
-        let n = m.nbodies;
-        if !cfg!(target_arch = "x86_64")
-            || crate::kinematics::DIAGONAL_INERTIA_SHORTCUT
-            || n < 1 + LEGS
-            || !(n - 1).is_multiple_of(LEGS)
-            || m.depth_order.len() != n - 1
-            || m.pose_step.len() != n
-        {
-            return None;
-        }
-        let groups: Vec<[usize; LEGS]> = m
-            .depth_order
-            .chunks_exact(LEGS)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect();
-        for (g, grp) in groups.iter().enumerate() {
-            let first = m.pose_step[grp[0]];
-            first.aligned_axis?;
-            for (k, &i) in grp.iter().enumerate() {
-                let want_parent = if g == 0 { 0 } else { groups[g - 1][k] };
-                let st = m.pose_step[i];
-                if m.parent[i] != want_parent
-                    || m.joint_type[i] != JointType::Revolute
-                    || st.aligned_axis != first.aligned_axis
-                    || st.placement_rotates != first.placement_rotates
-                    || st.placement_translates != first.placement_translates
-                {
-                    return None;
-                }
-            }
-        }
-        // Each body of group g − 1 is then the parent of exactly one body of
-        // group g (the same lane), so every chain is unbranched.
-        let mut slot = vec![(usize::MAX, usize::MAX); n];
-        for (g, grp) in groups.iter().enumerate() {
-            for (k, &i) in grp.iter().enumerate() {
-                slot[i] = (g, k);
-            }
-        }
-        let ng = groups.len();
-        let leg_major = (1..n).all(|i| slot[i] == ((i - 1) % ng, (i - 1) / ng));
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = leg_major;
-        Some(LegLanes {
-            #[cfg(target_arch = "x86_64")]
-            steps: groups.iter().map(|grp| GroupStep::of(m, grp)).collect(),
-            groups,
-            #[cfg(target_arch = "x86_64")]
-            slot,
-            #[cfg(target_arch = "x86_64")]
-            leg_major,
-        })
-    }
-}
-
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
-    use crate::aba::{aba, aba_from_kinematics};
-    use crate::kinematics::forward_kinematics;
+    use crate::dispatch::{aba, aba_from_kinematics, forward_kinematics};
     use crate::model::BaseKind;
+    use crate::plan::{LEGS, Plan};
     use crate::{Data, Model};
     use glam::{DQuat, DVec3};
     use rand::{Rng, SeedableRng};
@@ -296,12 +114,12 @@ mod tests {
     }
 
     /// The built-in `name` on `base` (legs in lanes where its shape allows)
-    /// and the same model on the general path (`leg_lanes = None`).
+    /// and the same model on the general path (`Plan::Scalar`).
     fn fast_and_general(name: &str, base: BaseKind) -> (Model, Model) {
         let desc = crate::robots::builtin(name).unwrap();
         let fast = Model::from_description(&desc, base).unwrap();
         let mut general = fast.clone();
-        general.leg_lanes = None;
+        general.plan = Plan::Scalar;
         (fast, general)
     }
 
@@ -315,7 +133,7 @@ mod tests {
     }
 
     /// Every output of kinematics and ABA, legs in lanes against the general
-    /// path (the same model with `leg_lanes = None`), bit for bit, at random
+    /// path (the same model with `Plan::Scalar`), bit for bit, at random
     /// states with and without external forces, on quad16 (floating and
     /// fixed base) and quad12.
     #[test]
@@ -326,9 +144,9 @@ mod tests {
             ("quad12", BaseKind::Floating),
         ] {
             let (fast, general) = fast_and_general(name, base);
-            if name == "quad16" {
-                assert!(fast.leg_lanes.is_some(), "{name} has its legs in lanes");
-            }
+            // both built-ins are four identical legs on a base: the plan
+            // is the model's shape, not its name
+            assert!(fast.leg_lanes().is_some(), "{name} has its legs in lanes");
             let mut r = ChaCha8Rng::seed_from_u64(7);
             for trial in 0..50 {
                 let mut q = fast.neutral_q();
@@ -375,7 +193,7 @@ mod tests {
         }
     }
 
-    /// [`crate::kinematics::leg_end_points`] gives the bits of
+    /// [`crate::dispatch::leg_end_points`] gives the bits of
     /// `Data::body_point_world` and `Data::body_point_velocity` after the
     /// full kinematics on the general path, at random states and points,
     /// floating and fixed base (the estimator's feet, base at rest, among
@@ -384,7 +202,7 @@ mod tests {
     /// `ddq` and base acceleration, bit for bit.
     #[test]
     fn ddq_only_aba_gives_the_same_ddq() {
-        use crate::aba::aba_ddq_from_kinematics;
+        use crate::dispatch::aba_ddq_from_kinematics;
         let (fast, _) = fast_and_general("quad16", BaseKind::Floating);
         let mut r = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..20 {
@@ -414,11 +232,10 @@ mod tests {
 
     #[test]
     fn leg_end_points_give_the_full_kinematics_bits() {
-        use crate::kinematics::leg_end_points;
-        use crate::leg_lanes::LEGS;
+        use crate::dispatch::leg_end_points;
         for base in [BaseKind::Floating, BaseKind::Fixed] {
             let (fast, general) = fast_and_general("quad16", base);
-            let plan = fast.leg_lanes.as_ref().expect("quad16's legs in lanes");
+            let plan = fast.leg_lanes().expect("quad16's legs in lanes");
             let last = *plan.groups.last().unwrap();
             let mut r = ChaCha8Rng::seed_from_u64(11);
             for trial in 0..100 {
@@ -469,10 +286,10 @@ mod tests {
     /// with and without external forces, on quad16 (floating and fixed base).
     #[test]
     fn rnea_in_lanes_gives_the_general_paths_bits() {
-        use crate::rnea::rnea_from_kinematics;
+        use crate::dispatch::rnea_from_kinematics;
         for base in [BaseKind::Floating, BaseKind::Fixed] {
             let (fast, general) = fast_and_general("quad16", base);
-            assert!(fast.leg_lanes.is_some());
+            assert!(fast.leg_lanes().is_some());
             let mut r = ChaCha8Rng::seed_from_u64(11);
             for trial in 0..50 {
                 let q = random_joints_and_x(&fast, &mut r);
@@ -512,7 +329,7 @@ mod tests {
     /// not).
     #[test]
     fn rnea_joint_torques_give_the_full_rneas_bits() {
-        use crate::rnea::{rnea_from_kinematics, rnea_joint_torques_from_kinematics};
+        use crate::dispatch::{rnea_from_kinematics, rnea_joint_torques_from_kinematics};
         for base in [BaseKind::Floating, BaseKind::Fixed] {
             let (fast, general) = fast_and_general("quad16", base);
             let mut r = ChaCha8Rng::seed_from_u64(12);
@@ -559,7 +376,7 @@ mod tests {
     fn f4_sin_cos(x: [f64; 4]) -> Option<([f64; 4], [f64; 4])> {
         multiversion::target::match_target! {
             "x86_64+avx2+fma" => {
-                let (s, c) = super::x4::F4::from_array(x).sin_cos();
+                let (s, c) = crate::kernels::f64x4::F4::from_array(x).sin_cos();
                 Some((s.to_array(), c.to_array()))
             },
             _ => {
@@ -624,7 +441,7 @@ mod tests {
     #[test]
     fn kinematics_only_data_gets_the_same_kinematics() {
         let (lanes, general) = fast_and_general("quad16", BaseKind::Floating);
-        assert!(lanes.leg_lanes.is_some());
+        assert!(lanes.leg_lanes().is_some());
         for m in [lanes, general] {
             kinematics_only_matches(&m);
         }

@@ -9,7 +9,7 @@
 //! are `#[target_feature(enable = "avx")]`: safe to call from code compiled
 //! for AVX (the x86-64-v3 clones of the dispatched passes), and only from there.
 
-use crate::spatial::{Force, Motion, RigidInertia, Transform};
+use crate::spatial::{Force, Motion, Transform};
 use core::arch::x86_64::{
     __m256d, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _CMP_NEQ_OQ, _CMP_NLT_UQ,
     _MM_FROUND_NO_EXC, _MM_FROUND_TO_ZERO, _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd,
@@ -725,18 +725,6 @@ pub struct Inertia4 {
 }
 
 impl Inertia4 {
-    /// Lane `k`, element by element from memory (no AVX needed; after
-    /// inlining, only the elements the caller uses are loaded).
-    #[inline(always)]
-    pub fn lane(&self, k: usize) -> RigidInertia {
-        let i = &self.inertia_com;
-        RigidInertia::new(
-            self.mass.lane(k),
-            self.com.lane(k),
-            DMat3::from_cols(i.x_axis.lane(k), i.y_axis.lane(k), i.z_axis.lane(k)),
-        )
-    }
-
     /// [`crate::spatial::RigidInertia::transformed`], each lane through its transform.
     #[inline]
     #[target_feature(enable = "avx")]

@@ -20,8 +20,8 @@
 //! chatters while standing; with `b_g / 4` it is 0.7 (regression test
 //! `quad16_stands_on_every_preset` in `tests/stand.rs`).
 
-use super::ContactError;
-use super::law::NormalLaw;
+use crate::contact::error::ContactError;
+use crate::contact::law::NormalLaw;
 
 /// One of study A's ground types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
