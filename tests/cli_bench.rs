@@ -156,12 +156,19 @@ fn bench_sensing_chooses_what_the_controller_reads() {
 /// the bench keeps Study A's `τ = Jᵀ f` (the performance history's figures).
 #[test]
 fn bench_whole_body_chooses_the_torque_layer() {
-    use quadsim::cli::bench::{BenchSensing, bench_scenario_with};
+    use quadsim::cli::bench::{BenchPlanner, BenchSensing, bench_scenario_with};
     use quadsim::scenario::parse_scenario;
     use quadsim::world::{Overrides, build_world};
     use quadsim_components::Controller;
     for whole_body in [false, true] {
-        let src = bench_scenario_with("quad16", 2, BenchSensing::Estimated, whole_body).unwrap();
+        let src = bench_scenario_with(
+            "quad16",
+            2,
+            BenchSensing::Estimated,
+            whole_body,
+            BenchPlanner::Vmc,
+        )
+        .unwrap();
         let scn = parse_scenario(std::path::Path::new("bench.toml"), src).unwrap();
         let w = build_world(&scn, Overrides::default()).unwrap();
         for (name, e) in &w.robots {
@@ -170,5 +177,29 @@ fn bench_whole_body_chooses_the_torque_layer() {
             };
             assert_eq!(walker.params.whole_body, whole_body, "{name}");
         }
+    }
+    let src = bench_scenario_with(
+        "quad16",
+        2,
+        BenchSensing::Estimated,
+        false,
+        BenchPlanner::Mpc,
+    )
+    .unwrap();
+    let scn = parse_scenario(std::path::Path::new("bench.toml"), src).unwrap();
+    let w = build_world(&scn, Overrides::default()).unwrap();
+    for (name, e) in &w.robots {
+        let Controller::Walker(walker) = &w.sim.robot(*e).unwrap().run.controller else {
+            panic!("{name}: quad16 trots under the walker");
+        };
+        assert!(
+            walker.params.whole_body,
+            "{name}: MPC needs the whole-body layer"
+        );
+        assert_eq!(
+            walker.params.planner,
+            quadsim_engine::control::walker::Planner::Mpc,
+            "{name}"
+        );
     }
 }

@@ -102,45 +102,12 @@ fn bench(c: &mut Criterion) {
     bench_mpc(c);
 }
 
-/// One convex-MPC solve over a trot's contact plan: quad16's mass and a
-/// composite inertia of its size, 10 steps of 0.05 s, the diagonal pairs
-/// swapping every five steps (about 60 force variables).
+/// One convex-MPC solve over a trot's contact plan
+/// ([`quadsim_engine::control::mpc::trot_benchmark_problem`]).
 fn bench_mpc(c: &mut Criterion) {
-    use quadsim_engine::control::mpc::{
-        MPC_FEET, Mpc, MpcParams, MpcProblem, MpcState, MpcStep, state_vector,
-    };
+    use quadsim_engine::control::mpc::{Mpc, MpcParams, trot_benchmark_problem};
     let params = MpcParams::default();
-    let n = params.horizon_steps;
-    let mut pb = MpcProblem::with_horizon(n);
-    pb.mass_kg = 28.0;
-    pb.inertia_heading = glam::DMat3::from_diagonal(DVec3::new(0.5, 1.6, 1.8));
-    pb.state = MpcState {
-        rpy: DVec3::new(0.01, -0.02, 0.1),
-        com_m: DVec3::new(0.0, 0.0, 0.45),
-        omega_world_radps: DVec3::new(0.1, -0.05, 0.0),
-        com_velocity_mps: DVec3::new(0.9, 0.05, -0.1),
-    };
-    let x0 = state_vector(&pb.state);
-    for k in 0..n {
-        let t = 0.05 * (k + 1) as f64;
-        let mut r = x0;
-        r[0] = 0.0;
-        r[1] = 0.0;
-        r[3] += t;
-        r[9] = 1.0;
-        pb.reference[k] = r;
-        let a = (k / 5) % 2 == 0;
-        pb.steps[k] = MpcStep {
-            stance: [a, !a, !a, a],
-            foot_m: [
-                DVec3::new(0.25, 0.15, -0.45),
-                DVec3::new(0.25, -0.15, -0.45),
-                DVec3::new(-0.25, 0.15, -0.45),
-                DVec3::new(-0.25, -0.15, -0.45),
-            ],
-            friction: [0.8; MPC_FEET],
-        };
-    }
+    let pb = trot_benchmark_problem(&params);
     let mut mpc = Mpc::new(params);
     c.bench_function("mpc/trot_horizon10", |b| {
         b.iter(|| black_box(mpc.solve(black_box(&pb)).unwrap()))

@@ -68,6 +68,11 @@ pub struct BenchArgs {
     /// Study A's trot, which the performance history measures.
     #[arg(long)]
     pub whole_body: bool,
+    /// quad16's body-force planner: `vmc` (Study A's virtual wrench) or
+    /// `mpc` (convex MPC; implies `--whole-body`); with `mpc` the output
+    /// also gives the median time of one MPC solve on a trot's problem.
+    #[arg(long, value_enum, default_value_t = BenchPlanner::Vmc)]
+    pub planner: BenchPlanner,
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -93,6 +98,34 @@ impl From<BenchLanes> for quadsim_components::LaneBatching {
             BenchLanes::Off => Self::Off,
         }
     }
+}
+
+/// quad16's body-force planner in the benchmark (`quadsim bench --planner`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BenchPlanner {
+    /// Study A's virtual model control.
+    Vmc,
+    /// Convex MPC on the single rigid body (with the whole-body layer).
+    Mpc,
+}
+
+/// Median wall time (µs) of `solves` solves of the MPC's trot problem
+/// ([`quadsim_engine::control::mpc::trot_benchmark_problem`]).
+pub fn mpc_solve_median_us(solves: usize) -> f64 {
+    use quadsim_engine::control::mpc::{Mpc, MpcParams, trot_benchmark_problem};
+    let params = MpcParams::default();
+    let pb = trot_benchmark_problem(&params);
+    let mut mpc = Mpc::new(params);
+    let mut times: Vec<f64> = (0..solves.max(1))
+        .map(|_| {
+            let t = std::time::Instant::now();
+            let ok = mpc.solve(&pb).is_ok();
+            std::hint::black_box(ok);
+            t.elapsed().as_secs_f64() * 1e6
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
 }
 
 /// What the benchmarked controllers read (`quadsim bench --sensing`).
@@ -127,18 +160,25 @@ pub fn bench_scenario(
     robots: usize,
     sensing: BenchSensing,
 ) -> Result<String, CliError> {
-    bench_scenario_with(model, robots, sensing, false)
+    bench_scenario_with(model, robots, sensing, false, BenchPlanner::Vmc)
 }
 
 /// [`bench_scenario`]; quad16 under the whole-body layer when `whole_body`
-/// (otherwise Study A's `τ = Jᵀ f` and trot timing, as the history measured).
+/// (otherwise Study A's `τ = Jᵀ f` and trot timing, as the history
+/// measured), and with the MPC planner (and the whole-body layer) when
+/// `planner` is [`BenchPlanner::Mpc`].
 pub fn bench_scenario_with(
     model: &str,
     robots: usize,
     sensing: BenchSensing,
     whole_body: bool,
+    planner: BenchPlanner,
 ) -> Result<String, CliError> {
-    let controller = match (model, whole_body) {
+    let mpc = planner == BenchPlanner::Mpc;
+    let controller = match (model, whole_body || mpc) {
+        ("quad16", true) if mpc => {
+            "kind = \"vmc\"\nplanner = \"mpc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
+        }
         ("quad16", false) => {
             "kind = \"vmc\"\nwhole_body = false\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
         }
@@ -198,7 +238,7 @@ impl BenchPoint {
 /// Builds, warms up and times one configuration.
 pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoint, CliError> {
     let build = |n: usize| {
-        let src = bench_scenario_with(&a.model, n, a.sensing, a.whole_body)?;
+        let src = bench_scenario_with(&a.model, n, a.sensing, a.whole_body, a.planner)?;
         let scn = parse_scenario(Path::new("bench.toml"), src).map_err(|e| bad(e.to_string()))?;
         build_world(
             &scn,
@@ -289,7 +329,9 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     println!(
         "{} ({}; controller on the {} state), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
         a.model,
-        if a.model == "quad16" && a.whole_body {
+        if a.model == "quad16" && a.planner == BenchPlanner::Mpc {
+            "trotting at 0.5 m/s under MPC and the whole-body layer"
+        } else if a.model == "quad16" && a.whole_body {
             "trotting at 0.5 m/s under VMC and the whole-body layer"
         } else if a.model == "quad16" {
             "trotting at 0.5 m/s under VMC, Study A's τ = Jᵀ f"
@@ -362,9 +404,16 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
         )?;
         println!("wrote {}", path.display());
     }
+    let mpc_us = (a.planner == BenchPlanner::Mpc).then(|| mpc_solve_median_us(200));
+    if let Some(us) = mpc_us {
+        println!("MPC solve (trot, 10 steps, about 60 force variables): median {us:.1} µs of 200");
+    }
     // The last line: the last configuration as one line of JSON (the issue's
     // keys), with every configuration under `points`.
     let mut last = rows.last().cloned().unwrap_or_else(|| json!({}));
+    if let Some(us) = mpc_us {
+        last["mpc_solve_median_us"] = json!(us);
+    }
     last["sensing"] = json!(a.sensing.name());
     last["build"] = json!(build.name());
     last["points"] = Value::Array(rows);

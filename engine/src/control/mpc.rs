@@ -489,6 +489,44 @@ impl Mpc {
     }
 }
 
+/// A trot's problem for timing a solve (criterion's `mpc/trot_horizon10`
+/// and `quadsim bench --planner mpc`): quad16's mass and an inertia of its
+/// size at 0.45 m, moving at 0.9 m/s toward a 1 m/s reference, the
+/// diagonal pairs swapping every five steps (about 60 force variables).
+pub fn trot_benchmark_problem(params: &MpcParams) -> MpcProblem {
+    let n = params.horizon_steps.max(1);
+    let mut pb = MpcProblem::with_horizon(n);
+    pb.mass_kg = 28.0;
+    pb.inertia_heading = DMat3::from_diagonal(DVec3::new(0.5, 1.6, 1.8));
+    pb.state = MpcState {
+        rpy: DVec3::new(0.01, -0.02, 0.1),
+        com_m: DVec3::new(0.0, 0.0, 0.45),
+        omega_world_radps: DVec3::new(0.1, -0.05, 0.0),
+        com_velocity_mps: DVec3::new(0.9, 0.05, -0.1),
+    };
+    let x0 = state_vector(&pb.state);
+    for k in 0..n {
+        let mut r = x0;
+        r[0] = 0.0;
+        r[1] = 0.0;
+        r[3] += params.step_s * (k + 1) as f64;
+        r[9] = 1.0;
+        pb.reference[k] = r;
+        let a = (k / 5) % 2 == 0;
+        pb.steps[k] = MpcStep {
+            stance: [a, !a, !a, a],
+            foot_m: [
+                DVec3::new(0.25, 0.15, -0.45),
+                DVec3::new(0.25, -0.15, -0.45),
+                DVec3::new(-0.25, 0.15, -0.45),
+                DVec3::new(-0.25, -0.15, -0.45),
+            ],
+            friction: [0.8; MPC_FEET],
+        };
+    }
+    pb
+}
+
 /// The rotational inertia of the whole robot about its CoM (kg·m², world
 /// axes), from the bodies' inertias at the kinematics in `data`.
 pub fn composite_inertia_about_com(
