@@ -8,6 +8,7 @@
 pub mod actuators;
 pub mod analysis;
 pub mod cli;
+pub mod divergence;
 pub mod error;
 pub mod heightmap;
 pub mod limits;
@@ -21,6 +22,7 @@ pub mod report;
 pub mod scenario;
 pub mod sensing;
 pub mod study;
+pub mod summary;
 pub mod terrain_spec;
 pub mod urdf;
 pub mod world;

@@ -68,14 +68,6 @@ fn json_text(v: Value) -> String {
     serde_json::to_string(&v).expect("json")
 }
 
-/// The integrator's name as in `summary.json`.
-pub fn integrator_name(scn: &Scenario) -> &'static str {
-    match scn.file.world.integrator {
-        crate::scenario::format::IntegratorSpec::SemiImplicitEuler => "semi_implicit_euler",
-        crate::scenario::format::IntegratorSpec::Rk4 => "rk4",
-    }
-}
-
 /// Creates `path`, writes the metadata and the terrain description, and
 /// attaches a logger sampling every `every_steps` steps to the world (robots
 /// with a rate of their own, `[robots.log] rate_hz`, at theirs; robots
@@ -111,7 +103,10 @@ pub fn start_run_log_with(
         "git_commit".to_string(),
         env!("QUADSIM_GIT_COMMIT").to_string(),
     );
-    quadsim.insert("integrator".to_string(), integrator_name(scn).to_string());
+    quadsim.insert(
+        "integrator".to_string(),
+        crate::summary::integrator_name(scn).to_string(),
+    );
     for (k, v) in [
         ("seed", json!(world.seed)),
         ("dt_s", json!(world.dt_s)),
@@ -123,7 +118,7 @@ pub fn start_run_log_with(
         ),
         (
             "summary_format_version",
-            json!(crate::cli::run::SUMMARY_FORMAT_VERSION),
+            json!(crate::summary::SUMMARY_FORMAT_VERSION),
         ),
     ] {
         quadsim.insert(k.to_string(), json_text(v));
@@ -175,7 +170,7 @@ impl RunLog {
         let t_ns = step_time_ns(clock.step, world.dt_s);
         for (name, root) in &world.robots {
             if let Some(r) = world.sim.robot(*root) {
-                let m = crate::cli::run::robot_json_in(world, name, r);
+                let m = crate::summary::RobotSummary::in_world(world, name, r).to_json();
                 self.log
                     .write_json(&metrics_topic(name), Schema::RobotMetrics, t_ns, &m);
             }

@@ -459,7 +459,22 @@ pub fn report_markdown(
     input: &ReportInput<'_>,
     figures: &[(String, Vec<(String, String)>)],
 ) -> String {
-    let s = input.summary;
+    render(
+        &input.summary.to_json(),
+        input.scenario_text,
+        input.log.is_some(),
+        figures,
+    )
+}
+
+/// [`report_markdown`] over the summary's JSON view: the metric rows are
+/// listed by key (`METRIC_ROWS`), as `summary.json` names them.
+fn render(
+    s: &Value,
+    scenario_text: &str,
+    logged: bool,
+    figures: &[(String, Vec<(String, String)>)],
+) -> String {
     let robots: Vec<&Value> = s["robots"].as_array().into_iter().flatten().collect();
     let mut out = String::new();
     let name = s["scenario"].as_str().unwrap_or("?");
@@ -561,7 +576,7 @@ pub fn report_markdown(
     sensing(&mut out, &robots);
 
     let _ = writeln!(out, "\n## Plots\n");
-    if input.log.is_none() {
+    if !logged {
         let _ = writeln!(
             out,
             "None: the run wrote no log (`--no-log`), and the plots are drawn from the log.\n"
@@ -585,7 +600,7 @@ pub fn report_markdown(
     );
     for (k, r) in robots.iter().enumerate() {
         let n = r["name"].as_str().unwrap_or("?");
-        let info = robot_info(input.scenario_text, n);
+        let info = robot_info(scenario_text, n);
         let _ = writeln!(out, "### `{n}` ({})\n", info.model);
         let mut notes = Notes::default();
         let mut body = String::new();
@@ -625,14 +640,7 @@ mod tests {
 
     /// The report of `summary` for [`SCN`], without a log or figures.
     fn md_of(summary: &Value) -> String {
-        report_markdown(
-            &ReportInput {
-                summary,
-                scenario_text: SCN,
-                log: None,
-            },
-            &[],
-        )
+        render(summary, SCN, false, &[])
     }
 
     #[test]

@@ -14,8 +14,6 @@ pub mod series;
 
 use std::path::{Path, PathBuf};
 
-use serde_json::Value;
-
 use crate::log::read::LogContents;
 
 /// File name of the report in a run's output directory.
@@ -37,7 +35,7 @@ pub struct ReportError {
 #[derive(Debug, Clone, Copy)]
 pub struct ReportInput<'a> {
     /// `summary.json` (its `timing` block, if any, is not used).
-    pub summary: &'a Value,
+    pub summary: &'a crate::summary::Summary,
     /// The scenario file's text (robot models, speed commands).
     pub scenario_text: &'a str,
     /// The log, for the plots; `None` for a run without a log (no plots).
@@ -173,13 +171,13 @@ pub fn needs_topic(topic: &str) -> bool {
 
 /// Writes `out_dir/report.md` and `out_dir/plots/<robot>_<plot>.{svg,png}`.
 pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFiles, ReportError> {
-    let robots: Vec<String> = input.summary["robots"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .filter_map(|r| r["name"].as_str().map(str::to_string))
+    let robots: Vec<String> = input
+        .summary
+        .robots
+        .iter()
+        .map(|r| r.name.clone())
         .collect();
-    let end_s = input.summary["sim_time_s"].as_f64().unwrap_or(0.0);
+    let end_s = input.summary.sim_time_s;
     let plots_dir = out_dir.join(PLOTS_DIR);
     let mut plot_files = Vec::new();
     let mut figures: Vec<(String, Vec<(String, String)>)> = Vec::new();

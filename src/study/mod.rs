@@ -21,6 +21,7 @@
 pub mod analysis;
 pub mod campaign;
 pub mod campaign_output;
+pub mod error;
 pub mod optimize;
 pub mod output;
 pub mod sample;
@@ -29,11 +30,13 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use serde_json::Value;
+
+pub use error::StudyError;
 
 use crate::scenario::spans::path_key;
 use crate::scenario::vary::{Variation, set_path};
 use crate::scenario::{Locator, ScenarioError, parse_scenario};
+use crate::summary::Summary;
 
 /// A study file.
 #[derive(Debug, Deserialize)]
@@ -254,16 +257,17 @@ fn check_path(
 pub fn with_values(
     base_source: &str,
     values: &BTreeMap<String, toml::Value>,
-) -> Result<String, String> {
-    let mut t: toml::Table = toml::from_str(base_source).map_err(|e| e.to_string())?;
+) -> Result<String, StudyError> {
+    let vary = |message: String| StudyError::Vary { message };
+    let mut t: toml::Table = toml::from_str(base_source).map_err(|e| vary(e.to_string()))?;
     for (p, v) in values {
-        set_path(&mut t, p, v.clone())?;
+        set_path(&mut t, p, v.clone()).map_err(vary)?;
     }
-    toml::to_string(&t).map_err(|e| e.to_string())
+    toml::to_string(&t).map_err(|e| vary(e.to_string()))
 }
 
 /// The scenario text of variant `k`: the base with the variant's values set.
-pub fn variant_source(study: &Study, k: usize) -> Result<String, String> {
+pub fn variant_source(study: &Study, k: usize) -> Result<String, StudyError> {
     with_values(&study.base_source, &study.variants[k])
 }
 
@@ -275,14 +279,18 @@ pub struct VariantResult {
     /// Its varied values.
     pub params: BTreeMap<String, toml::Value>,
     /// `summary.json` of the run without `timing`, or the error that stopped it.
-    pub outcome: Result<Value, String>,
+    pub outcome: Result<Summary, StudyError>,
 }
 
 /// Runs a scenario text (relative paths resolved from `base_path`) to the
 /// end on one thread; `summary.json` without `timing`, or the error that
 /// stopped it (a divergence is an error).
-pub fn run_source(base_path: &Path, src: String, duration_s: Option<f64>) -> Result<Value, String> {
-    let scn = parse_scenario(base_path, src).map_err(|e| e.message_with_path())?;
+pub fn run_source(
+    base_path: &Path,
+    src: String,
+    duration_s: Option<f64>,
+) -> Result<Summary, StudyError> {
+    let scn = parse_scenario(base_path, src)?;
     let mut world = crate::world::build_world(
         &scn,
         crate::world::Overrides {
@@ -290,18 +298,15 @@ pub fn run_source(base_path: &Path, src: String, duration_s: Option<f64>) -> Res
             threads: 1,
             ..Default::default()
         },
-    )
-    .map_err(|e| e.message_with_path())?;
+    )?;
     let mut done = 0;
     while done < world.steps {
         // passes of several steps (the same bits as one step at a time);
         // a divergence is reported at the step it happened
         done += world.sim.run_pass(world.steps - done);
-        crate::cli::run::check_finite(&world).map_err(|e| e.to_string())?;
+        crate::divergence::check_finite(&world)?;
     }
-    let mut s = crate::cli::run::summary_json(&scn, &world, 0.0, 1);
-    s.as_object_mut().expect("object").remove("timing");
-    Ok(s)
+    Ok(Summary::of_world(&scn, &world, None))
 }
 
 /// Runs variant `k` to the end on one thread (errors are recorded, not raised).
@@ -313,16 +318,5 @@ pub fn run_variant(study: &Study, k: usize) -> VariantResult {
         index: k,
         params,
         outcome,
-    }
-}
-
-impl ScenarioError {
-    /// `key path: message` (the variant's scenario text has no useful line).
-    pub fn message_with_path(&self) -> String {
-        if self.key_path.is_empty() {
-            self.message.clone()
-        } else {
-            format!("{}: {}", self.key_path, self.message)
-        }
     }
 }

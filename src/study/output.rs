@@ -37,10 +37,10 @@ pub fn row_json(r: &VariantResult) -> Value {
         .collect();
     match &r.outcome {
         Ok(s) => {
-            json!({"variant": r.index, "params": params, "status": "ok", "error": null, "summary": s})
+            json!({"variant": r.index, "params": params, "status": "ok", "error": null, "summary": s.to_json()})
         }
         Err(e) => {
-            json!({"variant": r.index, "params": params, "status": "failed", "error": e, "summary": null})
+            json!({"variant": r.index, "params": params, "status": "failed", "error": e.to_string(), "summary": null})
         }
     }
 }
