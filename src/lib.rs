@@ -20,6 +20,7 @@ pub mod names;
 pub mod physical;
 pub mod report;
 pub mod scenario;
+pub mod seed;
 pub mod sensing;
 pub mod study;
 pub mod summary;

@@ -449,7 +449,7 @@ impl Summary {
             let is_metrics = m
                 .topic
                 .rsplit_once('/')
-                .is_some_and(|(_, last)| last == crate::log::METRICS_SUFFIX);
+                .is_some_and(|(_, last)| last == crate::log::schema::METRICS_SUFFIX);
             if is_metrics {
                 let v = m
                     .json()

@@ -33,18 +33,11 @@ use crate::scenario::Scenario;
 use crate::world::World;
 use encode::GroundMesh;
 use schema::Schema;
+pub use schema::{METRICS_SUFFIX, metrics_topic};
 pub use writer::{LogError, McapLog, WriterStats};
 
 /// File name of the log in a run's output directory.
 pub const LOG_FILE: &str = "log.mcap";
-/// Topic suffix of the final metrics message of each robot.
-pub const METRICS_SUFFIX: &str = "metrics";
-
-/// The topic of robot `robot`'s metrics message.
-pub fn metrics_topic(robot: &str) -> String {
-    format!("/{robot}/{METRICS_SUFFIX}")
-}
-
 /// How a run ended, as recorded in the log's `run` metadata.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunOutcome {

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::{ReportInput, robot_info};
+use super::input::{ReportInput, robot_info};
 
 /// A number with `d` decimals, "—" when absent or not finite.
 fn num(v: &Value, d: usize) -> String {
