@@ -51,7 +51,19 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
     let mut plot_files = Vec::new();
     let mut figures: Vec<(String, Vec<(String, String)>)> = Vec::new();
     if let Some(log) = input.log {
-        for name in &robots {
+        // a herd's plots: its worst robots that were logged, at most
+        // `HERD_DETAIL_ROBOTS` of them
+        let herd = robots.len() >= markdown::HERD_MIN_ROBOTS;
+        let mut drawn = 0;
+        let order = if herd {
+            markdown::herd_detail_order(&input.summary.to_json())
+        } else {
+            robots.clone()
+        };
+        for name in &order {
+            if herd && drawn == markdown::HERD_DETAIL_ROBOTS {
+                break;
+            }
             let s = series::RobotSeries::from_log(log, name).map_err(|m| ReportError {
                 path: "log".into(),
                 message: m,
@@ -59,6 +71,7 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
             if s.is_empty() {
                 continue;
             }
+            drawn += 1;
             std::fs::create_dir_all(&plots_dir).map_err(|e| ReportError {
                 path: plots_dir.display().to_string(),
                 message: e.to_string(),
