@@ -416,18 +416,14 @@ impl Summary {
     /// `summary.json` without `timing`, from a log: the metrics from each
     /// robot's final `metrics` message (accumulated at full rate in the
     /// simulation, which a decimated log could not recompute), the rest from
-    /// the log's metadata records (`scenario`, `quadsim`, `run`). Errors name
-    /// the missing record, or the topic and key of a bad message.
+    /// the log's metadata records (`scenario`, `quadsim`, `run`). A killed
+    /// run's log has no `run` record and no metrics: its summary covers the
+    /// messages recovered, with `log_truncated` set. Errors name the missing
+    /// record, or the topic and key of a bad message.
     pub fn from_log(c: &LogContents) -> Result<Self, String> {
         let meta = |record: &str, key: &str| {
-            c.meta(record, key).ok_or_else(|| {
-                let why = if record == "run" && !c.metadata.contains_key("run") {
-                    " (the run did not finish: the process was killed before closing the log)"
-                } else {
-                    ""
-                };
-                format!("the log has no metadata '{record}.{key}'{why}")
-            })
+            c.meta(record, key)
+                .ok_or_else(|| format!("the log has no metadata '{record}.{key}'"))
         };
         fn number<T: serde::de::DeserializeOwned>(
             text: Result<&str, String>,
@@ -467,13 +463,33 @@ impl Summary {
                 "metadata 'quadsim.summary_format_version' = {format_version}: this quadsim reads {SUMMARY_FORMAT_VERSION}"
             ));
         }
-        let interrupted: bool = number(meta("run", "interrupted"), "run", "interrupted")?;
+        let dt_s = num("quadsim", "dt_s")?;
+        // A killed run wrote no `run` record (nor the metrics, written at
+        // the end): the summary then covers the messages recovered, up to
+        // the last one, and says the log was truncated.
+        let truncated = !c.metadata.contains_key("run");
+        let (interrupted, sim_time_s, steps) = if truncated {
+            let last_ns = c.messages.iter().map(|m| m.log_time_ns).max().unwrap_or(0);
+            let t = last_ns as f64 * 1e-9;
+            let steps = if dt_s > 0.0 {
+                (t / dt_s).round() as u64
+            } else {
+                0
+            };
+            (false, t, steps)
+        } else {
+            (
+                number(meta("run", "interrupted"), "run", "interrupted")?,
+                num("run", "sim_time_s")?,
+                number(meta("run", "steps"), "run", "steps")?,
+            )
+        };
         Ok(Summary {
             format_version,
             scenario: meta("scenario", "name")?.to_string(),
-            sim_time_s: num("run", "sim_time_s")?,
-            steps: number(meta("run", "steps"), "run", "steps")?,
-            dt_s: num("quadsim", "dt_s")?,
+            sim_time_s,
+            steps,
+            dt_s,
             seed: number(meta("quadsim", "seed"), "quadsim", "seed")?,
             quadsim_version: meta("quadsim", "version")?.to_string(),
             git_commit: meta("quadsim", "git_commit")?.to_string(),
@@ -483,7 +499,7 @@ impl Summary {
             robots,
             diverged: None,
             interrupted,
-            log_truncated: false,
+            log_truncated: truncated,
             timing: None,
         })
     }

@@ -660,6 +660,13 @@ fn render(
     let mut out = String::new();
     let name = s["scenario"].as_str().unwrap_or("?");
     let _ = writeln!(out, "# quadsim run report: `{name}`\n");
+    if s["log_truncated"].as_bool().unwrap_or(false) {
+        let _ = writeln!(
+            out,
+            "**Log truncated**: the run was killed before it closed its log, so the metrics (written at the end) are missing; the plots cover the part recovered, up to t = {} s.\n",
+            num(&s["sim_time_s"], 3)
+        );
+    }
     let interrupted = s["interrupted"].as_bool().unwrap_or(false);
     if interrupted {
         let _ = writeln!(

@@ -40,12 +40,29 @@ pub fn needs_topic(topic: &str) -> bool {
 
 /// Writes `out_dir/report.md` and `out_dir/plots/<robot>_<plot>.{svg,png}`.
 pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFiles, ReportError> {
-    let robots: Vec<String> = input
+    let mut robots: Vec<String> = input
         .summary
         .robots
         .iter()
         .map(|r| r.name.clone())
         .collect();
+    if input.summary.log_truncated
+        && robots.is_empty()
+        && let Some(log) = input.log
+    {
+        // a killed run's log has no metrics messages: its robots are those
+        // with per-step channels (`/<robot>/com`), in order of appearance
+        for m in &log.messages {
+            if let Some(name) = m
+                .topic
+                .strip_prefix('/')
+                .and_then(|t| t.strip_suffix("/com"))
+                && !robots.iter().any(|r| r == name)
+            {
+                robots.push(name.to_string());
+            }
+        }
+    }
     let end_s = input.summary.sim_time_s;
     let plots_dir = out_dir.join(PLOTS_DIR);
     let mut plot_files = Vec::new();
