@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds quadsim for this machine's CPU (the documented build setting of
-# README, "Performance": RUSTFLAGS="-C target-cpu=native", in its own target
+# docs/performance.md: RUSTFLAGS="-C target-cpu=native", in its own target
 # directory, target/native) and checks that it gives the portable build's
 # bits: the trot and the herd scenarios run by both binaries must write the
 # same log.mcap bytes and the same summary.json, its wall-clock `timing`

@@ -41,3 +41,42 @@ impl CliError {
 pub fn bad(msg: impl Into<String>) -> CliError {
     CliError::BadInput(msg.into())
 }
+
+/// A run that could not be built or did not finish: the scenario error
+/// names file, line and key path; a divergence the robot, time and quantity.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// The scenario is invalid (file, line, column and key path).
+    #[error(transparent)]
+    Scenario(#[from] crate::scenario::ScenarioError),
+    /// A robot's state left the finite, physical range.
+    #[error("robot '{robot}' diverged at t = {t_s:.4} s: {what} ({cause})")]
+    Diverged {
+        /// The robot.
+        robot: String,
+        /// Simulated time (s).
+        t_s: f64,
+        /// The coordinate or contact that diverged.
+        what: String,
+        /// The likely cause from the numbers.
+        cause: String,
+    },
+    /// An I/O failure on a named path.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+impl From<RunError> for CliError {
+    fn from(e: RunError) -> Self {
+        match e {
+            RunError::Scenario(e) => CliError::BadInput(e.to_string()),
+            e @ RunError::Diverged { .. } => CliError::Diverged(e.to_string()),
+            RunError::Io { path, source } => CliError::Io { path, source },
+        }
+    }
+}

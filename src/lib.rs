@@ -8,6 +8,7 @@
 pub mod actuators;
 pub mod analysis;
 pub mod cli;
+pub mod divergence;
 pub mod error;
 pub mod heightmap;
 pub mod limits;
@@ -19,8 +20,10 @@ pub mod names;
 pub mod physical;
 pub mod report;
 pub mod scenario;
+pub mod seed;
 pub mod sensing;
 pub mod study;
+pub mod summary;
 pub mod terrain_spec;
 pub mod urdf;
 pub mod world;

@@ -114,6 +114,32 @@ pub fn is_inside(dir: &Path, path: &Path) -> bool {
     }
 }
 
+/// A robot name or glob pattern (`*`, `?`, `[abc]`), e.g. `q16-00*`.
+#[derive(Debug, Clone)]
+pub struct RobotPattern(glob::Pattern);
+
+impl RobotPattern {
+    /// Parses `pattern`; an empty or malformed one is an error saying why.
+    pub fn new(pattern: &str) -> Result<Self, String> {
+        if pattern.trim().is_empty() {
+            return Err("an empty robot name or pattern".into());
+        }
+        glob::Pattern::new(pattern)
+            .map(Self)
+            .map_err(|e| format!("'{pattern}' is not a name or glob pattern: {e}"))
+    }
+
+    /// Whether robot `name` matches.
+    pub fn matches(&self, name: &str) -> bool {
+        self.0.matches(name)
+    }
+
+    /// The pattern as written.
+    pub fn as_str(&self) -> &str {
+        self.0.as_str()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -53,16 +53,7 @@ pub struct World {
     pub warnings: Vec<String>,
 }
 
-/// A 64-bit seed for the random stream named `name` under `world_seed`
-/// (FNV-1a over the seed's bytes and the name): independent of file order.
-pub fn stream_seed(world_seed: u64, name: &str) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in world_seed.to_le_bytes().iter().chain(name.as_bytes()) {
-        h ^= u64::from(*b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
+pub use crate::seed::stream_seed;
 
 /// Options that override the scenario.
 #[derive(Debug, Clone, Copy, Default)]

@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use quadsim::cli::run::robot_json;
 use quadsim::scenario::{ScenarioError, parse_scenario};
+use quadsim::summary::robot_json;
 use quadsim::world::{Overrides, World, build_world};
 use quadsim_engine::actuator_model::ActuatorKind;
 
@@ -54,7 +54,7 @@ fn defaults_and_overrides_resolve_per_joint() {
     let root = w.robots[0].1;
     let sim = w.sim.robot_mut(root).unwrap();
     let specs = sim.workspace.actuators.as_ref().unwrap().specs().to_vec();
-    let names = quadsim::cli::run::joint_names(&sim.model);
+    let names = quadsim::summary::joint_names(&sim.model);
     for (n, s) in names.iter().zip(&specs) {
         if n == "LF_knee" {
             assert_eq!(s.kind, ActuatorKind::Ideal, "{n}");

@@ -232,7 +232,7 @@ gravity_compensation = "static"
 fn a_divergence_is_reported_at_its_step_after_a_pass_of_several() {
     let scn = parse_scenario(Path::new("diverging.toml"), DIVERGING.to_string()).unwrap();
     let check = |w: &World| {
-        quadsim::cli::run::check_finite(w)
+        quadsim::divergence::check_finite(w)
             .err()
             .map(|e| e.to_string())
     };

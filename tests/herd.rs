@@ -336,7 +336,7 @@ fn a_mixed_trotting_herd_is_bit_identical_across_threads_and_order() {
 #[test]
 fn a_hundred_trotting_robots_on_flat_ground_do_not_fall() {
     // 100 quad16 at 0.3–0.5 m/s with torso masses 9–11 kg, 10 s, 2 threads
-    // (at 0.6 m/s, 3 of 100 fell between 4.5 and 7.5 s: README, "Status")
+    // (at 0.6 m/s, 3 of 100 fell between 4.5 and 7.5 s: CHANGELOG.md, the README's former status)
     let src = format!(
         "{}
 [[herds]]

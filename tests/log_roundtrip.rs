@@ -297,7 +297,7 @@ fn channels_counts_schemas_and_values_match_the_simulation() {
     assert_eq!(c.meta("run", "steps"), Some("403"));
     assert_eq!(c.meta("run", "interrupted"), Some("false"));
     let metrics = last(&c, "/rex/metrics");
-    let expected = quadsim::cli::run::robot_json("rex", sim);
+    let expected = quadsim::summary::robot_json("rex", sim);
     assert_eq!(metrics, expected);
 }
 

@@ -40,7 +40,9 @@ fn the_optimiser_improves_on_its_start_within_its_budget() {
     assert!(best < start, "best {best} vs start {start}");
     // the best is a real simulation's objective, recomputed from its summary
     let i = v["best"]["evaluation"].as_u64().unwrap() as usize;
-    let again = quadsim::study::optimize::objective(&evals[i]["summary"], 10.0);
+    // (read back through the typed, versioned summary)
+    let summary = quadsim::summary::Summary::from_json(evals[i]["summary"].clone()).unwrap();
+    let again = quadsim::study::optimize::objective(&summary, 10.0);
     assert!((again - best).abs() < 1e-12, "{again} vs {best}");
     assert!(dir.join("run0/plots/convergence.png").exists());
     assert!(

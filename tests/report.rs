@@ -286,3 +286,91 @@ fn several_robots_get_plots_named_per_robot() {
         }
     }
 }
+
+/// A herd's report (issue 29, item 9) keeps every robot's model and
+/// aggregates across robots: one mean/min/max table instead of a column per
+/// robot, the worst robots named with their model, and the per-robot detail
+/// and plots capped at four robots, however many were logged. `quadsim
+/// report` rebuilds the same text from the log.
+#[test]
+fn a_herd_report_aggregates_across_robots_and_keeps_their_models() {
+    let dir = tmp("herd");
+    let herd = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/herd.toml");
+    quadsim(&[
+        "run",
+        s(&herd),
+        "--out",
+        s(&dir),
+        "--duration",
+        "0.3",
+        "--log-robots",
+        "q16-00*,q12-00*",
+        "--log-rate",
+        "50",
+        "--quiet",
+        "--no-monitor",
+    ]);
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let summary = read_json(&dir.join("summary.json"));
+    let n = summary["robots"].as_array().unwrap().len();
+    assert_eq!(n, 102);
+    // no table has a column per robot: every table row has at most 7 cells
+    let widest = md
+        .lines()
+        .filter(|l| l.starts_with('|'))
+        .map(|l| l.matches('|').count() - 1)
+        .max()
+        .unwrap();
+    assert!(widest <= 7, "a table with {widest} columns");
+    assert!(
+        md.contains("| metric | mean | min | max | min at | max at |"),
+        "{md}"
+    );
+    assert!(md.contains(&format!("across the herd's {n} robots")));
+    // the aggregate is the summary's: the mean forward speed across robots
+    let speeds: Vec<f64> = summary["robots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["mean_forward_speed_mps"].as_f64().unwrap())
+        .collect();
+    let mean = speeds.iter().sum::<f64>() / n as f64;
+    let max = speeds.iter().cloned().fold(f64::MIN, f64::max);
+    assert!(
+        md.contains(&format!("| mean forward speed (m/s) | {mean:.3} |")),
+        "{md}"
+    );
+    assert!(md.contains(&format!(" | {max:.3} | `")), "{md}");
+    // the detail and the plots: four robots, each with its model
+    let detailed: Vec<&str> = md
+        .lines()
+        .filter(|l| l.starts_with("### `"))
+        .filter(|l| l.ends_with(')'))
+        .collect();
+    assert_eq!(detailed.len(), 4, "{detailed:?}");
+    for l in &detailed {
+        assert!(l.ends_with("(quad16)") || l.ends_with("(quad12)"), "{l}");
+    }
+    assert!(!md.contains("()"), "a robot without its model");
+    assert!(!md.contains("Neither study's robot"), "{md}");
+    let plots = std::fs::read_dir(dir.join("plots")).unwrap().count();
+    assert_eq!(plots, 4 * 2 * PLOTS.len(), "plot files");
+    // the worst robots' table names a model in every row
+    let worst = md.split("### Worst robots").nth(1).unwrap();
+    let rows: Vec<&str> = worst
+        .lines()
+        .filter(|l| l.starts_with("| `"))
+        .take(4)
+        .collect();
+    assert_eq!(rows.len(), 4);
+    for r in rows {
+        assert!(r.contains("| quad16 |") || r.contains("| quad12 |"), "{r}");
+    }
+    // rebuilt from the log: the same text
+    let rebuilt = dir.join("rebuilt");
+    quadsim(&["report", s(&dir.join("log.mcap")), "--out", s(&rebuilt)]);
+    assert_eq!(
+        std::fs::read_to_string(rebuilt.join("report.md")).unwrap(),
+        md
+    );
+}

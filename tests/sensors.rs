@@ -6,10 +6,10 @@
 
 use std::path::Path;
 
-use quadsim::cli::run::robot_json;
 use quadsim::log::read::read_log;
 use quadsim::log::{RunOutcome, start_run_log};
 use quadsim::scenario::{ScenarioError, parse_scenario};
+use quadsim::summary::robot_json;
 use quadsim::world::{Overrides, build_world};
 use serde_json::Value;
 

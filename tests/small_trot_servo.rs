@@ -10,9 +10,9 @@
 
 use std::path::Path;
 
-use quadsim::cli::run::robot_json;
 use quadsim::report::actuators::actuator_capacity;
 use quadsim::scenario::{load_scenario, parse_scenario};
+use quadsim::summary::robot_json;
 use quadsim::world::{Overrides, World, build_world};
 use quadsim_engine::actuator_model::{S3003_NO_LOAD_SPEED_RADPS, S3003_STALL_TORQUE_NM};
 use serde_json::Value;

@@ -90,7 +90,7 @@ def quadsim_herd(exe: Path, robots: int, steps: int, blocks: int) -> tuple[float
 
 def quadsim_us_per_step(exe: Path, steps: int, blocks: int, sensing: str) -> tuple[float, str]:
     """`quadsim bench` for one robot on one thread: µs per step (median block), and the
-    build the binary is ("portable" or "cpu": README, "The build for the CPU")."""
+    build the binary is ("portable" or "cpu": docs/performance.md, "The build for the CPU")."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "bench.json"
         subprocess.run(

@@ -421,7 +421,7 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Which build of quadsim the figures are of (README, "The build for the
+/// Which build of quadsim the figures are of (docs/performance.md, "The build for the
 /// CPU"): both give the same bits, not the same speed.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Build {

@@ -66,7 +66,13 @@ pub fn run(a: OptimizeArgs) -> Result<(), CliError> {
         let mut rec = vec![i.to_string(), e.generation.to_string()];
         rec.extend(e.values.iter().map(|v| v.to_string()));
         rec.push(e.objective.to_string());
-        rec.push(e.outcome.as_ref().err().cloned().unwrap_or_default());
+        rec.push(
+            e.outcome
+                .as_ref()
+                .err()
+                .map(ToString::to_string)
+                .unwrap_or_default(),
+        );
         w.write_record(&rec)
             .map_err(|e| io(&p, std::io::Error::other(e)))?;
     }
@@ -132,7 +138,12 @@ fn report_md(opt: &crate::study::optimize::Optimization, history: &[Evaluation])
     let best = best_index(history).expect("start point");
     let (s0, sb) = (&history[0], &history[best]);
     let metric = |e: &Evaluation, k: &str| -> String {
-        match e.outcome.as_ref().ok().map(|s| &s["robots"][0][k]) {
+        match e
+            .outcome
+            .as_ref()
+            .ok()
+            .map(|s| s.to_json()["robots"][0][k].clone())
+        {
             Some(Value::Number(n)) => format!("{:.4}", n.as_f64().unwrap_or(f64::NAN)),
             Some(Value::Bool(b)) => b.to_string(),
             _ => "—".into(),

@@ -9,13 +9,10 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
-use serde_json::{Map, Value, json};
-use sha2::{Digest, Sha256};
-
 use crate::error::{CliError, bad};
-use crate::log::METRICS_SUFFIX;
-use crate::log::read::{LogContents, read_log_topics};
+use crate::log::read::read_log_topics;
+use crate::summary::Summary;
+use clap::Args;
 
 /// Arguments of `quadsim report`.
 #[derive(Debug, Args)]
@@ -32,7 +29,7 @@ pub fn run(a: ReportArgs) -> Result<(), CliError> {
     let contents =
         read_log_topics(&a.log, &crate::report::needs_topic).map_err(|e| bad(e.to_string()))?;
     let summary =
-        summary_from_log(&contents).map_err(|e| bad(format!("{}: {e}", a.log.display())))?;
+        Summary::from_log(&contents).map_err(|e| bad(format!("{}: {e}", a.log.display())))?;
     let out = a.out.clone().unwrap_or_else(|| {
         a.log
             .parent()
@@ -44,11 +41,7 @@ pub fn run(a: ReportArgs) -> Result<(), CliError> {
         source: e,
     })?;
     let path = out.join("summary.json");
-    std::fs::write(
-        &path,
-        serde_json::to_string_pretty(&summary).expect("json") + "\n",
-    )
-    .map_err(|e| CliError::Io {
+    std::fs::write(&path, summary.to_text()).map_err(|e| CliError::Io {
         path: path.display().to_string(),
         source: e,
     })?;
@@ -75,60 +68,4 @@ pub fn run(a: ReportArgs) -> Result<(), CliError> {
         out.join(crate::report::PLOTS_DIR).display()
     );
     Ok(())
-}
-
-/// `summary.json` without `timing`, from a log. Errors name the missing record or key.
-pub fn summary_from_log(c: &LogContents) -> Result<Value, String> {
-    let meta = |record: &str, key: &str| {
-        c.meta(record, key).ok_or_else(|| {
-            let why = if record == "run" && !c.metadata.contains_key("run") {
-                " (the run did not finish: the process was killed before closing the log)"
-            } else {
-                ""
-            };
-            format!("the log has no metadata '{record}.{key}'{why}")
-        })
-    };
-    let number = |record: &str, key: &str| -> Result<Value, String> {
-        let text = meta(record, key)?;
-        serde_json::from_str(text).map_err(|e| format!("metadata '{record}.{key}' = {text:?}: {e}"))
-    };
-    let text = meta("scenario", "text")?;
-    let sha = Sha256::digest(text.as_bytes());
-    let mut robots = Vec::new();
-    for m in &c.messages {
-        let is_metrics = m
-            .topic
-            .rsplit_once('/')
-            .is_some_and(|(_, last)| last == METRICS_SUFFIX);
-        if is_metrics {
-            robots.push(
-                m.json()
-                    .map_err(|e| format!("{}: not JSON: {e}", m.topic))?,
-            );
-        }
-    }
-    let mut s = Map::new();
-    s.insert(
-        "format_version".into(),
-        number("quadsim", "summary_format_version")?,
-    );
-    s.insert("scenario".into(), json!(meta("scenario", "name")?));
-    s.insert("sim_time_s".into(), number("run", "sim_time_s")?);
-    s.insert("steps".into(), number("run", "steps")?);
-    s.insert("dt_s".into(), number("quadsim", "dt_s")?);
-    s.insert("seed".into(), number("quadsim", "seed")?);
-    s.insert("quadsim_version".into(), json!(meta("quadsim", "version")?));
-    s.insert("git_commit".into(), json!(meta("quadsim", "git_commit")?));
-    s.insert("scenario_sha256".into(), json!(format!("{sha:x}")));
-    s.insert("integrator".into(), json!(meta("quadsim", "integrator")?));
-    s.insert(
-        "controller_rate_hz".into(),
-        number("quadsim", "controller_rate_hz")?,
-    );
-    s.insert("robots".into(), Value::Array(robots));
-    if number("run", "interrupted")? == json!(true) {
-        s.insert("interrupted".into(), json!(true));
-    }
-    Ok(Value::Object(s))
 }

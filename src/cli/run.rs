@@ -5,16 +5,13 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use quadsim_engine::metrics::MetricsSummary;
-use serde_json::{Value, json};
-use sha2::{Digest, Sha256};
+use serde_json::Value;
 
+use crate::divergence::{all_diverged, check_finite, diverged_count};
 use crate::error::{CliError, bad};
 use crate::scenario::{Scenario, load_scenario};
+use crate::summary::Summary;
 use crate::world::{Overrides, World, build_world};
-
-/// Version of `summary.json`'s layout.
-pub const SUMMARY_FORMAT_VERSION: u32 = 1;
 
 /// Arguments of `quadsim run`.
 #[derive(Debug, Args)]
@@ -260,7 +257,7 @@ pub fn schema() -> Result<(), CliError> {
 #[derive(Debug)]
 pub struct RunOutput {
     /// `summary.json` as written.
-    pub summary: Value,
+    pub summary: Summary,
     /// Where it was written.
     pub out_dir: PathBuf,
     /// Stopped early by Ctrl-C or SIGTERM (`summary.json` covers the part that ran).
@@ -450,15 +447,11 @@ fn start_commands(
     }
 }
 
-pub use quadsim_engine::divergence::{
-    DIVERGED_ANGULAR_SPEED_RADPS, DIVERGED_LINEAR_SPEED_MPS, DIVERGED_PENETRATION_M,
-};
-
 /// Runs `quadsim run`.
 pub fn run(a: RunArgs) -> Result<(), CliError> {
     let out = run_scenario(&a)?;
     if !a.quiet {
-        print_table(&out.summary);
+        print_table(&out.summary.to_json());
         println!("wrote {}", out.out_dir.join("summary.json").display());
         if let Some(r) = &out.report {
             println!(
@@ -481,7 +474,7 @@ pub fn run(a: RunArgs) -> Result<(), CliError> {
     if out.interrupted {
         eprintln!(
             "interrupted at t = {} s: log and summary.json cover the part that ran",
-            out.summary["sim_time_s"]
+            out.summary.sim_time_s
         );
         std::process::exit(130);
     }
@@ -597,10 +590,9 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     if let Some(e) = command_error {
         return Err(bad(e));
     }
-    let mut summary = summary_json(&scn, &world, wall, a.threads);
+    let mut summary = Summary::of_world(&scn, &world, Some(wall));
     // Some robots diverged and the others ran to the end: each diverged
-    // robot's entry says when and why (`robot_json`), and the run's error
-    // names the first.
+    // robot's entry says when and why, and the run's error names the first.
     let partly_diverged = match (&outcome.diverged, check_finite(&world)) {
         (None, Err(e)) => Some(format!(
             "{e}; the other {} robot(s) ran to the end",
@@ -611,26 +603,24 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     if let Some(d) = outcome.diverged.as_ref().or(partly_diverged.as_ref()) {
         // What was computed up to the divergence is kept: the summary (and
         // the report) cover the run until then; the error follows below.
-        summary["diverged"] = json!(d);
+        summary.diverged = Some(d.clone());
     } else if outcome.interrupted {
-        summary["interrupted"] = json!(true);
+        summary.interrupted = true;
     } else {
         add_push_searches(a, &scn, &mut summary)?;
     }
-    if let Some(m) = &monitor_stats {
-        summary["timing"]["monitor_published"] = json!(m.published());
-        summary["timing"]["monitor_dropped"] = json!(m.dropped());
-    }
-    if let Some(c) = &commands {
-        summary["timing"]["commands_applied"] = json!(c.stats().applied);
-        summary["timing"]["commands_rejected"] = json!(c.stats().rejected);
+    if let Some(t) = summary.timing.as_mut() {
+        if let Some(m) = &monitor_stats {
+            t.monitor_published = Some(m.published());
+            t.monitor_dropped = Some(m.dropped());
+        }
+        if let Some(c) = &commands {
+            t.commands_applied = Some(c.stats().applied);
+            t.commands_rejected = Some(c.stats().rejected);
+        }
     }
     let path = out_dir.join("summary.json");
-    std::fs::write(
-        &path,
-        serde_json::to_string_pretty(&summary).expect("json") + "\n",
-    )
-    .map_err(|e| CliError::Io {
+    std::fs::write(&path, summary.to_text()).map_err(|e| CliError::Io {
         path: path.display().to_string(),
         source: e,
     })?;
@@ -659,7 +649,7 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
 /// Runs the push searches the scenario (`[robots.analysis] push_search`) or
 /// `--push-search` asks for and adds each result to its robot's entry in
 /// `summary` as `push_recovery` (see `crate::analysis`).
-fn add_push_searches(a: &RunArgs, scn: &Scenario, summary: &mut Value) -> Result<(), CliError> {
+fn add_push_searches(a: &RunArgs, scn: &Scenario, summary: &mut Summary) -> Result<(), CliError> {
     use crate::analysis::{PushSearchOptions, push_search};
     for r in &scn.file.robots {
         if !(a.push_search || r.analysis.push_search) {
@@ -683,11 +673,8 @@ fn add_push_searches(a: &RunArgs, scn: &Scenario, summary: &mut Value) -> Result
                 }
             );
         }
-        if let Some(entry) = summary["robots"]
-            .as_array_mut()
-            .and_then(|rs| rs.iter_mut().find(|e| e["name"] == r.name.as_str()))
-        {
-            entry["push_recovery"] = found.to_json();
+        if let Some(entry) = summary.robot_mut(&r.name) {
+            entry.push_recovery = Some(found.to_json());
         }
     }
     Ok(())
@@ -697,7 +684,7 @@ fn add_push_searches(a: &RunArgs, scn: &Scenario, summary: &mut Value) -> Result
 /// same input `quadsim report` has, so both write the same files).
 fn write_run_report(
     scn: &Scenario,
-    summary: &Value,
+    summary: &Summary,
     out_dir: &Path,
     logged: bool,
 ) -> Result<crate::report::ReportFiles, CliError> {
@@ -713,9 +700,7 @@ fn write_run_report(
         None
     };
     let mut summary = summary.clone();
-    if let Some(o) = summary.as_object_mut() {
-        o.remove("timing");
-    }
+    summary.timing = None;
     crate::report::write_report(
         &crate::report::ReportInput {
             summary: &summary,
@@ -733,394 +718,6 @@ pub fn report_error(e: crate::report::ReportError) -> CliError {
         path: e.path,
         source: std::io::Error::other(e.message),
     }
-}
-
-/// Stops with an error naming the robot, time and quantity when a robot
-/// has diverged: a state not finite, a speed beyond
-/// [`DIVERGED_LINEAR_SPEED_MPS`] or [`DIVERGED_ANGULAR_SPEED_RADPS`], or a
-/// contact sunk beyond [`DIVERGED_PENETRATION_M`]. The step's robot pass
-/// checks every robot after every step and keeps the first divergence
-/// ([`RobotRun::diverged`](quadsim_components::RobotRun::diverged)), so
-/// the error names the step it happened at, also after a pass of several
-/// steps ([`quadsim_systems::Simulation::run_pass`]).
-pub fn check_finite(world: &World) -> Result<(), CliError> {
-    for (name, root) in &world.robots {
-        let Some(r) = world.sim.robot(*root) else {
-            continue;
-        };
-        if let Some((t, what, cause)) = divergence_of(world, r) {
-            return Err(CliError::Diverged(format!(
-                "robot '{name}' diverged at t = {t:.4} s: {what} ({cause})"
-            )));
-        }
-    }
-    Ok(())
-}
-
-/// Whether every robot has diverged (and so the run can stop).
-pub fn all_diverged(world: &World) -> bool {
-    diverged_count(world) == world.robots.len()
-}
-
-/// How many robots have diverged.
-pub fn diverged_count(world: &World) -> usize {
-    world
-        .robots
-        .iter()
-        .filter(|(_, root)| {
-            world
-                .sim
-                .robot(*root)
-                .is_some_and(|r| r.run.diverged.is_some())
-        })
-        .count()
-}
-
-/// Share of the run a joint may spend at its torque limit before a
-/// divergence is put down to saturated actuators.
-const SATURATION_CAUSE_SHARE: f64 = 0.2;
-
-/// The likely cause of a robot's divergence, from the numbers: a contact
-/// too stiff for the time step (the stability limit), a fall followed by a
-/// joint spinning free on an ideal torque source, saturated actuators, or
-/// none of these.
-pub fn divergence_cause(
-    world: &World,
-    r: &quadsim_components::RobotSim,
-    d: &quadsim_engine::divergence::Divergence,
-) -> String {
-    use quadsim_engine::contact::stability::check_stability_split;
-    use quadsim_engine::divergence::Divergence;
-    let ground = crate::world::ground_of(world);
-    let mut materials = Vec::new();
-    if let Some(g) = ground.default_ground() {
-        materials.push(g.material);
-    }
-    materials.extend(ground.patches().iter().map(|p| *p.material()));
-    let per_foot = r.model.total_mass / r.run.n_feet.max(1) as f64;
-    let unstable = materials
-        .iter()
-        .flat_map(|m| check_stability_split(m, world.dt_s, per_foot, per_foot))
-        .next();
-    let m = r.run.metrics.summary();
-    let a = r.run.actuators.summary();
-    let joint_speed = matches!(d, Divergence::Speed { index, .. } if *index >= r.model.base_nv());
-    if let Some(w) = unstable {
-        format!(
-            "likely cause: the ground contact is unstable at this time step ({w}); \
-             a smaller world.dt_s or a softer ground"
-        )
-    } else if let (Some(t), true) = (m.fell_at_s, joint_speed) {
-        format!(
-            "likely cause: the robot fell at t = {t:.3} s and a joint then spun up without \
-             a speed limit (an ideal torque source); give its joints motors ([robots.actuators])              or velocity limits"
-        )
-    } else if a.max_time_share_at_torque_limit > SATURATION_CAUSE_SHARE {
-        format!(
-            "likely cause: actuators saturated ({:.0} % of the run at a torque limit); \
-             the controller's demands exceed the joints' ratings",
-            100.0 * a.max_time_share_at_torque_limit
-        )
-    } else if let Some(t) = m.fell_at_s {
-        format!(
-            "the robot fell at t = {t:.3} s; no unstable contact or saturation was found: \
-             check the model's masses and inertias, or try the rk4 integrator"
-        )
-    } else {
-        "no unstable contact, fall or saturation was found: check the model's masses and \
-             inertias and the controller's gains, or try a smaller world.dt_s or the rk4 integrator"
-            .to_string()
-    }
-}
-
-/// A diverged robot's time, what diverged and the likely cause.
-pub fn divergence_of(
-    world: &World,
-    r: &quadsim_components::RobotSim,
-) -> Option<(f64, String, String)> {
-    use quadsim_engine::divergence::Divergence;
-    {
-        let (t, d) = r.run.diverged?;
-        let m = &r.model;
-        let (nq0, nv0) = (m.base_nq(), m.base_nv());
-        let joint = |vi: usize| m.joint_name[m.v_body[vi]].as_str();
-        let what = match d {
-            Divergence::Position { index: i } if i < nq0 => {
-                format!("q[{i}] (base pose) is not finite")
-            }
-            Divergence::Position { index: i } => {
-                format!("joint '{}' angle is not finite", joint(i - nq0 + nv0))
-            }
-            Divergence::Velocity { index: i } => {
-                format!("v[{i}] ({}) is not finite", velocity_name(m, i))
-            }
-            Divergence::Speed {
-                index: i,
-                value: x,
-                limit: lim,
-            } => {
-                let (_, unit) = quadsim_engine::divergence::speed_limit(m, i);
-                format!(
-                    "v[{i}] ({}) = {x:.4e} {unit} exceeds {lim} {unit}",
-                    velocity_name(m, i)
-                )
-            }
-            Divergence::Penetration { point: i, depth_m } => {
-                let body = r.contact.points[i].body;
-                let link = m
-                    .frames
-                    .iter()
-                    .find(|f| f.body == body)
-                    .map_or("?", |f| f.name.as_str());
-                format!(
-                    "contact point {i} (on link '{link}') penetrates {depth_m:.4} m, beyond {DIVERGED_PENETRATION_M} m"
-                )
-            }
-        };
-        Some((t, what, divergence_cause(world, r, &d)))
-    }
-}
-
-/// What velocity coordinate `i` is.
-fn velocity_name(m: &quadsim_engine::Model, i: usize) -> String {
-    let nv0 = m.base_nv();
-    if m.is_floating() && i < 6 {
-        let axis = ["x", "y", "z"][i % 3];
-        let kind = if i < 3 { "linear" } else { "angular" };
-        format!("base {kind} velocity {axis}, base frame")
-    } else if i >= nv0 {
-        format!("joint '{}' velocity", m.joint_name[m.v_body[i]])
-    } else {
-        format!("base velocity {i}")
-    }
-}
-
-fn opt(x: Option<f64>) -> Value {
-    x.map_or(Value::Null, |v| json!(v))
-}
-
-/// The actuated joints' names, in the order of the joint arrays.
-pub fn joint_names(model: &quadsim_engine::Model) -> Vec<String> {
-    (model.base_nv()..model.actuated_nv())
-        .map(|vi| model.joint_name[model.v_body[vi]].clone())
-        .collect()
-}
-
-/// One robot's metrics as JSON (the keys of `scenarios/README.md`);
-/// `joint_names` name the per-joint arrays' entries.
-pub fn metrics_json(name: &str, joint_names: &[String], m: &MetricsSummary) -> Value {
-    let joints: Vec<Value> = joint_names
-        .iter()
-        .enumerate()
-        .map(|(j, n)| {
-            json!({
-                "name": n,
-                "peak_abs_torque_nm": m.joint_peak_abs_torque_nm.get(j).copied().unwrap_or(0.0),
-                "mean_abs_torque_nm": m.joint_mean_abs_torque_nm.get(j).copied().unwrap_or(0.0),
-            })
-        })
-        .collect();
-    json!({
-        "name": name,
-        "fell": m.fell,
-        "fell_at_s": opt(m.fell_at_s),
-        "mean_forward_speed_mps": m.mean_forward_speed_mps,
-        "peak_forward_speed_mps": m.peak_forward_speed_mps,
-        "base_height_mean_m": m.base_height_mean_m,
-        "base_height_p2p_m": m.base_height_p2p_m,
-        "com_height_mean_m": m.com_height_mean_m,
-        "com_height_p2p_m": m.com_height_p2p_m,
-        "roll_range_rad": m.roll_range_rad,
-        "pitch_range_rad": m.pitch_range_rad,
-        "yaw_range_rad": m.yaw_range_rad,
-        "joint_rms_error_rad": opt(m.joint_rms_error_rad),
-        "max_foot_force_n": m.max_foot_force_n,
-        "energy_j": m.energy_j,
-        "energy_per_step_j": opt(m.energy_per_step_j),
-        "steps": m.steps,
-        "min_stability_margin_m": opt(m.min_stability_margin_m),
-        "distance_m": m.distance_m,
-        "com_displacement_m": m.com_displacement_m,
-        "com_mean_velocity_mps": m.com_mean_velocity_mps,
-        "com_oscillation_m": m.com_oscillation_m,
-        "joints": joints,
-    })
-}
-
-/// A limit for JSON: `null` when unlimited (JSON has no infinity).
-fn finite(x: f64) -> Option<f64> {
-    x.is_finite().then_some(x)
-}
-
-/// The actuator kind of joint `j` as `[robots.actuators]` spells it.
-fn actuator_kind(r: &quadsim_components::RobotSim, j: usize) -> &'static str {
-    use quadsim_engine::actuator_model::ActuatorKind;
-    match r
-        .workspace
-        .actuators
-        .as_ref()
-        .and_then(|b| b.specs().get(j))
-        .map(|s| s.kind)
-    {
-        Some(ActuatorKind::DcMotor) => "dc_motor",
-        Some(ActuatorKind::Servo) => "servo",
-        _ => "ideal",
-    }
-}
-
-/// Share of the run a joint may spend at its torque limit before a load
-/// counts as not carried ("saturated").
-pub const SATURATED_TIME_SHARE: f64 = 0.05;
-/// Mean forward speed below this fraction of the walking command's mean (as
-/// ramped) counts as "failed to track speed" (above [`TRACKED_COMMAND_MIN_MPS`]).
-pub const SPEED_TRACKING_FRACTION: f64 = 0.9;
-/// Smallest forward command whose tracking is judged (m/s).
-pub const TRACKED_COMMAND_MIN_MPS: f64 = 0.05;
-
-/// One robot's object in `summary.json` and in the log's `metrics` message:
-/// its metrics, total mass, actuator load and load verdict (definitions in
-/// scenarios/README.md, "Metrics"), plus `study_b` (Study B's Table 4 torque
-/// comparison) for a robot run by the `prescribed` controller in hybrid mode
-/// on quad12.
-pub fn robot_json(name: &str, r: &quadsim_components::RobotSim) -> Value {
-    let m = r.run.metrics.summary();
-    let names = joint_names(&r.model);
-    let mut v = metrics_json(name, &names, &m);
-    let a = r.run.actuators.summary();
-    let joints: Vec<Value> = a
-        .joints
-        .iter()
-        .enumerate()
-        .map(|(j, l)| {
-            json!({
-                "joint": names.get(j).cloned().unwrap_or_default(),
-                "peak_torque_nm": l.peak_torque_nm,
-                "peak_torque_share": l.peak_torque_share,
-                "time_at_torque_limit_s": l.time_at_torque_limit_s,
-                "time_at_speed_limit_s": l.time_at_speed_limit_s,
-                "peak_demand_nm": l.peak_demand_nm,
-                "torque_limit_nm": finite(l.torque_limit_nm),
-                "speed_limit": finite(l.speed_limit),
-                "torque_limit_hits": l.torque_limit_hits,
-                "speed_limit_hits": l.speed_limit_hits,
-                "time_at_envelope_limit_s": l.time_at_envelope_limit_s,
-                "envelope_limit_hits": l.envelope_limit_hits,
-                "kind": actuator_kind(r, j),
-            })
-        })
-        .collect();
-    // The walking command as ramped, averaged over the run.
-    let (dist, t) = r.run.commanded_distance_m;
-    let command = (t > 0.0).then(|| dist / t);
-    let reason = if m.fell {
-        Some("fell")
-    } else if a
-        .max_time_share_at_torque_limit
-        .max(a.max_time_share_at_envelope_limit)
-        > SATURATED_TIME_SHARE
-    {
-        Some("saturated")
-    } else if command.is_some_and(|c| {
-        c > TRACKED_COMMAND_MIN_MPS && m.mean_forward_speed_mps < SPEED_TRACKING_FRACTION * c
-    }) {
-        Some("failed to track speed")
-    } else {
-        None
-    };
-    let o = v.as_object_mut().expect("object");
-    o.insert("total_mass_kg".into(), json!(r.model.total_mass));
-    o.insert("commanded_speed_mps".into(), json!(command));
-    o.insert(
-        "actuators".into(),
-        json!({
-            "max_peak_torque_share": a.max_peak_torque_share,
-            "max_time_share_at_torque_limit": a.max_time_share_at_torque_limit,
-            "max_time_share_at_speed_limit": a.max_time_share_at_speed_limit,
-            "max_time_share_at_envelope_limit": a.max_time_share_at_envelope_limit,
-            "joints": joints,
-        }),
-    );
-    o.insert(
-        "load".into(),
-        json!({"carried": reason.is_none(), "reason": reason}),
-    );
-    v["sensing"] = crate::sensing::sensing_json(r.sensing.as_deref());
-    if let quadsim_components::Controller::Prescribed(p) = &r.run.controller
-        && let Some(c) = &p.study_b
-        && c.sim_hip.samples > 0
-    {
-        let joint = |m: &quadsim_engine::legs::study_b_dynamics::TorqueStats,
-                     s: &quadsim_engine::legs::study_b_dynamics::TorqueStats| {
-            json!({
-                "model_peak_nm": m.peak_nm,
-                "model_mean_nm": m.mean_abs_nm,
-                "sim_peak_nm": s.peak_nm,
-                "sim_mean_nm": s.mean_abs_nm,
-                "peak_ratio_sim_to_model": s.peak_nm / m.peak_nm,
-                "mean_ratio_sim_to_model": s.mean_abs_nm / m.mean_abs_nm,
-            })
-        };
-        v["study_b"] = json!({
-            "hip_tau2": joint(&c.model_hip, &c.sim_hip),
-            "knee_tau3": joint(&c.model_knee, &c.sim_knee),
-            "samples": c.sim_hip.samples,
-        });
-    }
-    v
-}
-
-/// [`robot_json`], with `diverged` (`t_s`, `what`, `cause`) for a robot
-/// whose run ended in a divergence (the others ran on).
-pub fn robot_json_in(world: &World, name: &str, r: &quadsim_components::RobotSim) -> Value {
-    let mut v = robot_json(name, r);
-    if let Some((t, what, cause)) = divergence_of(world, r) {
-        v["diverged"] = json!({"t_s": t, "what": what, "cause": cause});
-    }
-    v
-}
-
-/// `summary.json`: deterministic fields, then `timing` (the only wall-clock part).
-pub fn summary_json(scn: &Scenario, world: &World, wall_time_s: f64, threads: usize) -> Value {
-    let clock = world.sim.clock();
-    let robots: Vec<Value> = world
-        .robots
-        .iter()
-        .filter_map(|(name, root)| {
-            world
-                .sim
-                .robot(*root)
-                .map(|r| robot_json_in(world, name, r))
-        })
-        .collect();
-    let sha = Sha256::digest(scn.source.as_bytes());
-    let used_threads = world
-        .sim
-        .world
-        .resource::<quadsim_components::SimThreadPool>()
-        .threads();
-    let _ = threads;
-    json!({
-        "format_version": SUMMARY_FORMAT_VERSION,
-        "scenario": scn.name,
-        "sim_time_s": clock.time_s,
-        "steps": clock.step,
-        "dt_s": world.dt_s,
-        "seed": world.seed,
-        "quadsim_version": env!("CARGO_PKG_VERSION"),
-        "git_commit": env!("QUADSIM_GIT_COMMIT"),
-        "scenario_sha256": format!("{sha:x}"),
-        "integrator": match scn.file.world.integrator {
-            crate::scenario::format::IntegratorSpec::SemiImplicitEuler => "semi_implicit_euler",
-            crate::scenario::format::IntegratorSpec::Rk4 => "rk4",
-        },
-        "controller_rate_hz": scn.file.world.controller_rate_hz,
-        "robots": robots,
-        "timing": {
-            "wall_time_s": wall_time_s,
-            "real_time_factor": if wall_time_s > 0.0 { clock.time_s / wall_time_s } else { 0.0 },
-            "threads": used_threads,
-        },
-    })
 }
 
 /// Prints the metrics table (one column per robot).

@@ -178,7 +178,10 @@ pub fn sweep(a: SweepArgs) -> Result<(), CliError> {
         eprintln!(
             "variant {} failed: {}",
             r.index,
-            r.outcome.as_ref().err().map_or("", |e| e.as_str())
+            r.outcome
+                .as_ref()
+                .err()
+                .map_or(String::new(), |e| e.to_string())
         );
     }
     println!(

@@ -33,18 +33,11 @@ use crate::scenario::Scenario;
 use crate::world::World;
 use encode::GroundMesh;
 use schema::Schema;
+pub use schema::{METRICS_SUFFIX, metrics_topic};
 pub use writer::{LogError, McapLog, WriterStats};
 
 /// File name of the log in a run's output directory.
 pub const LOG_FILE: &str = "log.mcap";
-/// Topic suffix of the final metrics message of each robot.
-pub const METRICS_SUFFIX: &str = "metrics";
-
-/// The topic of robot `robot`'s metrics message.
-pub fn metrics_topic(robot: &str) -> String {
-    format!("/{robot}/{METRICS_SUFFIX}")
-}
-
 /// How a run ended, as recorded in the log's `run` metadata.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunOutcome {
@@ -66,14 +59,6 @@ pub struct RunLog {
 /// back and writing it again gives the same text).
 fn json_text(v: Value) -> String {
     serde_json::to_string(&v).expect("json")
-}
-
-/// The integrator's name as in `summary.json`.
-pub fn integrator_name(scn: &Scenario) -> &'static str {
-    match scn.file.world.integrator {
-        crate::scenario::format::IntegratorSpec::SemiImplicitEuler => "semi_implicit_euler",
-        crate::scenario::format::IntegratorSpec::Rk4 => "rk4",
-    }
 }
 
 /// Creates `path`, writes the metadata and the terrain description, and
@@ -111,7 +96,10 @@ pub fn start_run_log_with(
         "git_commit".to_string(),
         env!("QUADSIM_GIT_COMMIT").to_string(),
     );
-    quadsim.insert("integrator".to_string(), integrator_name(scn).to_string());
+    quadsim.insert(
+        "integrator".to_string(),
+        crate::summary::integrator_name(scn).to_string(),
+    );
     for (k, v) in [
         ("seed", json!(world.seed)),
         ("dt_s", json!(world.dt_s)),
@@ -123,7 +111,7 @@ pub fn start_run_log_with(
         ),
         (
             "summary_format_version",
-            json!(crate::cli::run::SUMMARY_FORMAT_VERSION),
+            json!(crate::summary::SUMMARY_FORMAT_VERSION),
         ),
     ] {
         quadsim.insert(k.to_string(), json_text(v));
@@ -175,7 +163,7 @@ impl RunLog {
         let t_ns = step_time_ns(clock.step, world.dt_s);
         for (name, root) in &world.robots {
             if let Some(r) = world.sim.robot(*root) {
-                let m = crate::cli::run::robot_json_in(world, name, r);
+                let m = crate::summary::RobotSummary::in_world(world, name, r).to_json();
                 self.log
                     .write_json(&metrics_topic(name), Schema::RobotMetrics, t_ns, &m);
             }

@@ -15,6 +15,14 @@
 
 use serde_json::{Value, json};
 
+/// Topic suffix of the final metrics message of each robot.
+pub const METRICS_SUFFIX: &str = "metrics";
+
+/// The topic of robot `robot`'s metrics message.
+pub fn metrics_topic(robot: &str) -> String {
+    format!("/{robot}/{METRICS_SUFFIX}")
+}
+
 /// A schema of the log: its MCAP name and its JSON Schema text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Schema {

@@ -10,31 +10,7 @@ use crate::scenario::Scenario;
 use crate::scenario::format::LogRateSpec;
 use crate::world::World;
 
-/// A robot name or glob pattern (`*`, `?`, `[abc]`), e.g. `q16-00*`.
-#[derive(Debug, Clone)]
-pub struct RobotPattern(glob::Pattern);
-
-impl RobotPattern {
-    /// Parses `pattern`; an empty or malformed one is an error saying why.
-    pub fn new(pattern: &str) -> Result<Self, String> {
-        if pattern.trim().is_empty() {
-            return Err("an empty robot name or pattern".into());
-        }
-        glob::Pattern::new(pattern)
-            .map(Self)
-            .map_err(|e| format!("'{pattern}' is not a name or glob pattern: {e}"))
-    }
-
-    /// Whether robot `name` matches.
-    pub fn matches(&self, name: &str) -> bool {
-        self.0.matches(name)
-    }
-
-    /// The pattern as written.
-    pub fn as_str(&self) -> &str {
-        self.0.as_str()
-    }
-}
+pub use crate::names::RobotPattern;
 
 /// The command line's say over the log (`quadsim run`).
 #[derive(Debug, Clone, Default)]

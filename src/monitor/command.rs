@@ -15,7 +15,7 @@ use quadsim_components::{ControlRate, Controller};
 use quadsim_engine::control::vmc::VmcCommand;
 
 use super::frame::MAX_DOF;
-use super::{MonitorError, commands_service, node_name, service_name};
+use super::service::{MonitorError, commands_service, node_name, service_name};
 use crate::world::World;
 
 /// Version of [`RobotCommand`]'s layout.
@@ -205,7 +205,7 @@ impl CommandReceiver {
     pub fn before_step(
         &mut self,
         world: &mut World,
-        monitor: Option<&super::RunMonitor>,
+        monitor: Option<&super::run::RunMonitor>,
     ) -> Result<(), MonitorError> {
         let k = world.sim.clock().step;
         let every = world

@@ -13,7 +13,7 @@ use quadsim_systems::{LogRecord, LogSink, Records, RobotInfo, SampleView, ViewRe
 use serde_json::json;
 
 use super::frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
-use super::{
+use super::service::{
     MAX_SUBSCRIBERS, MonitorError, SUBSCRIBER_BUFFER_FRAMES, cleanup_dead_nodes, frames_service,
     header_service, node_name, service_name,
 };

@@ -9,7 +9,7 @@ use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use serde_json::Value;
 
 use super::frame::{LAYOUT_VERSION, RobotFrame, TYPE_NAME};
-use super::{
+use super::service::{
     MonitorError, SERVICE_PREFIX, cleanup_dead_nodes, frames_service, header_service, node_name,
     service_name,
 };

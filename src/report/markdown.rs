@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::{ReportInput, robot_info};
+use super::input::{ReportInput, robot_info};
 
 /// A number with `d` decimals, "—" when absent or not finite.
 fn num(v: &Value, d: usize) -> String {
@@ -453,17 +453,220 @@ fn sensing(out: &mut String, robots: &[&Value]) {
     );
 }
 
+/// More robots than this make a herd: its report aggregates across robots
+/// (mean, min, max; the worst robots) instead of one column per robot.
+pub const HERD_MIN_ROBOTS: usize = 7;
+/// A herd's report details (joint torques, sensing, plots, the studies) this
+/// many robots: the worst ones (see [`herd_detail_order`]).
+pub const HERD_DETAIL_ROBOTS: usize = 4;
+
+/// A herd's robots, worst first: fallen ones by time of fall, then by speed
+/// tracked (mean forward speed over the mean command, or the speed alone
+/// without a command), then by name. The detail of a herd's report follows
+/// this order.
+pub fn herd_detail_order(summary: &Value) -> Vec<String> {
+    let mut robots: Vec<&Value> = summary["robots"].as_array().into_iter().flatten().collect();
+    let key = |r: &Value| {
+        let fell = r["fell_at_s"].as_f64().unwrap_or(f64::INFINITY);
+        let v = r["mean_forward_speed_mps"].as_f64().unwrap_or(f64::NAN);
+        let tracked = match r["commanded_speed_mps"].as_f64() {
+            Some(c) if c > 0.0 => v / c,
+            _ => v,
+        };
+        (
+            fell,
+            if tracked.is_finite() {
+                tracked
+            } else {
+                f64::NEG_INFINITY
+            },
+        )
+    };
+    robots.sort_by(|a, b| {
+        let (ka, kb) = (key(a), key(b));
+        ka.0.total_cmp(&kb.0)
+            .then(ka.1.total_cmp(&kb.1))
+            .then_with(|| a["name"].as_str().cmp(&b["name"].as_str()))
+    });
+    robots
+        .iter()
+        .filter_map(|r| r["name"].as_str().map(str::to_string))
+        .collect()
+}
+
+/// A herd's metrics: per metric the mean, min and max across its robots
+/// and which robots hold the min and max; then the worst robots.
+fn herd_metrics(out: &mut String, robots: &[&Value], worst: &[&Value], scenario_text: &str) {
+    let n = robots.len();
+    let _ = writeln!(
+        out,
+        "\n## Metrics\n\nAccumulated at every simulation step (definitions: scenarios/README.md, \"Metrics\"), across the herd's {n} robots; every robot's own values are in `summary.json`.\n"
+    );
+    let fallen = robots
+        .iter()
+        .filter(|r| r["fell"] == Value::Bool(true))
+        .count();
+    let mut rows = vec![vec![
+        "fell".to_string(),
+        format!("{fallen} of {n}"),
+        String::new(),
+        String::new(),
+        String::new(),
+        String::new(),
+    ]];
+    for (label, key, f) in METRIC_ROWS.iter() {
+        // scalar metrics only; ranges by their extremes
+        let (lo_hi, scalar): (Vec<(f64, f64, &str)>, bool) = match *key {
+            "roll_range_rad" | "pitch_range_rad" | "yaw_range_rad" => (
+                robots
+                    .iter()
+                    .filter_map(|r| {
+                        let a = r[*key].as_array()?;
+                        Some((
+                            a.first()?.as_f64()?,
+                            a.get(1)?.as_f64()?,
+                            r["name"].as_str()?,
+                        ))
+                    })
+                    .collect(),
+                false,
+            ),
+            "fell"
+            | "push_recovery"
+            | "com_displacement_m"
+            | "com_mean_velocity_mps"
+            | "com_oscillation_m" => continue,
+            _ => (
+                robots
+                    .iter()
+                    .filter_map(|r| {
+                        let x = r[*key].as_f64().filter(|x| x.is_finite())?;
+                        Some((x, x, r["name"].as_str()?))
+                    })
+                    .collect(),
+                true,
+            ),
+        };
+        if lo_hi.is_empty() {
+            rows.push(vec![
+                label.to_string(),
+                "—".into(),
+                "—".into(),
+                "—".into(),
+                String::new(),
+                String::new(),
+            ]);
+            continue;
+        }
+        let lo = lo_hi
+            .iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .expect("not empty");
+        let hi = lo_hi
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("not empty");
+        let mean = if scalar {
+            f(&serde_json::json!(
+                lo_hi.iter().map(|x| x.0).sum::<f64>() / lo_hi.len() as f64
+            ))
+        } else {
+            "—".into()
+        };
+        let fmt = |x: f64| {
+            if scalar {
+                f(&serde_json::json!(x))
+            } else {
+                num(&serde_json::json!(x), 3)
+            }
+        };
+        let counted = if lo_hi.len() < n {
+            format!(" ({} of {n} robots)", lo_hi.len())
+        } else {
+            String::new()
+        };
+        rows.push(vec![
+            format!("{label}{counted}"),
+            mean,
+            fmt(lo.0),
+            fmt(hi.1),
+            format!("`{}`", lo.2),
+            format!("`{}`", hi.2),
+        ]);
+    }
+    table(
+        out,
+        &["metric", "mean", "min", "max", "min at", "max at"],
+        &rows,
+    );
+    let _ = writeln!(
+        out,
+        "\nRange rows give the smallest lower and the largest upper end across robots.\n\n### Worst robots\n\nFallen robots first (earliest fall), then the lowest speed over its command.\n"
+    );
+    let rows: Vec<Vec<String>> = worst
+        .iter()
+        .map(|r| {
+            let name = r["name"].as_str().unwrap_or("?");
+            vec![
+                format!("`{name}`"),
+                robot_info(scenario_text, name).model,
+                match r["fell_at_s"].as_f64() {
+                    Some(t) => format!("**yes**, at {t:.3} s"),
+                    None => "no".into(),
+                },
+                num(&r["mean_forward_speed_mps"], 3),
+                num(&r["commanded_speed_mps"], 3),
+                num(&r["min_stability_margin_m"], 4),
+            ]
+        })
+        .collect();
+    table(
+        out,
+        &[
+            "robot",
+            "model",
+            "fell",
+            "mean forward speed (m/s)",
+            "mean command (m/s)",
+            "min stability margin (m)",
+        ],
+        &rows,
+    );
+}
+
 /// The whole `report.md`. `figures` lists, per robot, the plots written
 /// (caption, file stem under `plots/`).
 pub fn report_markdown(
     input: &ReportInput<'_>,
     figures: &[(String, Vec<(String, String)>)],
 ) -> String {
-    let s = input.summary;
+    render(
+        &input.summary.to_json(),
+        input.scenario_text,
+        input.log.is_some(),
+        figures,
+    )
+}
+
+/// [`report_markdown`] over the summary's JSON view: the metric rows are
+/// listed by key (`METRIC_ROWS`), as `summary.json` names them.
+fn render(
+    s: &Value,
+    scenario_text: &str,
+    logged: bool,
+    figures: &[(String, Vec<(String, String)>)],
+) -> String {
     let robots: Vec<&Value> = s["robots"].as_array().into_iter().flatten().collect();
     let mut out = String::new();
     let name = s["scenario"].as_str().unwrap_or("?");
     let _ = writeln!(out, "# quadsim run report: `{name}`\n");
+    if s["log_truncated"].as_bool().unwrap_or(false) {
+        let _ = writeln!(
+            out,
+            "**Log truncated**: the run was killed before it closed its log, so the metrics (written at the end) are missing; the plots cover the part recovered, up to t = {} s.\n",
+            num(&s["sim_time_s"], 3)
+        );
+    }
     let interrupted = s["interrupted"].as_bool().unwrap_or(false);
     if interrupted {
         let _ = writeln!(
@@ -471,16 +674,65 @@ pub fn report_markdown(
             "**Interrupted** (Ctrl-C or SIGTERM): everything below covers the part that ran.\n"
         );
     }
-    let fell: Vec<String> = robots
-        .iter()
-        .map(|r| {
-            let n = r["name"].as_str().unwrap_or("?");
-            match r["fell_at_s"].as_f64() {
-                Some(t) => format!("{n}: **yes**, at t = {t:.3} s"),
-                None => format!("{n}: no"),
-            }
-        })
-        .collect();
+    let herd = robots.len() >= HERD_MIN_ROBOTS;
+    // a herd's detail: its worst robots only
+    let order = if herd {
+        herd_detail_order(s)
+    } else {
+        Vec::new()
+    };
+    let detail: Vec<&Value> = if herd {
+        order
+            .iter()
+            .take(HERD_DETAIL_ROBOTS)
+            .filter_map(|n| {
+                robots
+                    .iter()
+                    .find(|r| r["name"].as_str() == Some(n))
+                    .copied()
+            })
+            .collect()
+    } else {
+        robots.clone()
+    };
+    let fell: Vec<String> = if herd {
+        let fallen: Vec<&str> = robots
+            .iter()
+            .filter(|r| r["fell"] == Value::Bool(true))
+            .filter_map(|r| r["name"].as_str())
+            .collect();
+        let shown = fallen
+            .iter()
+            .take(10)
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>();
+        let more = if fallen.len() > shown.len() {
+            format!(", … {} more", fallen.len() - shown.len())
+        } else {
+            String::new()
+        };
+        vec![if fallen.is_empty() {
+            format!("none of {}", robots.len())
+        } else {
+            format!(
+                "{} of {}: {}{more}",
+                fallen.len(),
+                robots.len(),
+                shown.join(", ")
+            )
+        }]
+    } else {
+        robots
+            .iter()
+            .map(|r| {
+                let n = r["name"].as_str().unwrap_or("?");
+                match r["fell_at_s"].as_f64() {
+                    Some(t) => format!("{n}: **yes**, at t = {t:.3} s"),
+                    None => format!("{n}: no"),
+                }
+            })
+            .collect()
+    };
     let sha = s["scenario_sha256"].as_str().unwrap_or("?");
     let rows = vec![
         vec![
@@ -515,27 +767,39 @@ pub fn report_markdown(
     ];
     table(&mut out, &["run", ""], &rows);
 
-    // metrics, one column per robot
-    let _ = writeln!(
-        out,
-        "\n## Metrics\n\nAccumulated at every simulation step (definitions: scenarios/README.md, \"Metrics\").\n"
-    );
-    let mut header = vec!["metric"];
-    header.extend(robots.iter().map(|r| r["name"].as_str().unwrap_or("?")));
-    let any_push = robots
-        .iter()
-        .any(|r| r.get("push_recovery").is_some_and(|p| !p.is_null()));
-    let rows: Vec<Vec<String>> = METRIC_ROWS
-        .iter()
-        .filter(|(_, key, _)| *key != "push_recovery" || any_push)
-        .map(|(label, key, f)| {
-            let mut row = vec![label.to_string()];
-            row.extend(robots.iter().map(|r| f(&r[*key])));
-            row
-        })
-        .collect();
-    table(&mut out, &header, &rows);
-    for r in &robots {
+    if herd {
+        herd_metrics(&mut out, &robots, &detail, scenario_text);
+    } else {
+        // metrics, one column per robot
+        let _ = writeln!(
+            out,
+            "\n## Metrics\n\nAccumulated at every simulation step (definitions: scenarios/README.md, \"Metrics\").\n"
+        );
+        let mut header = vec!["metric"];
+        header.extend(robots.iter().map(|r| r["name"].as_str().unwrap_or("?")));
+        let any_push = robots
+            .iter()
+            .any(|r| r.get("push_recovery").is_some_and(|p| !p.is_null()));
+        let rows: Vec<Vec<String>> = METRIC_ROWS
+            .iter()
+            .filter(|(_, key, _)| *key != "push_recovery" || any_push)
+            .map(|(label, key, f)| {
+                let mut row = vec![label.to_string()];
+                row.extend(robots.iter().map(|r| f(&r[*key])));
+                row
+            })
+            .collect();
+        table(&mut out, &header, &rows);
+    }
+    if herd {
+        let _ = writeln!(
+            out,
+            "\nThe detail below (joint torques, sensing, plots, the studies) covers the {} worst robots; the other {} are in `summary.json`.",
+            detail.len(),
+            robots.len() - detail.len()
+        );
+    }
+    for r in &detail {
         let joints = r["joints"].as_array().cloned().unwrap_or_default();
         if joints.is_empty() {
             continue;
@@ -558,10 +822,10 @@ pub fn report_markdown(
         table(&mut out, &["joint", "peak", "time-mean"], &rows);
     }
 
-    sensing(&mut out, &robots);
+    sensing(&mut out, &detail);
 
     let _ = writeln!(out, "\n## Plots\n");
-    if input.log.is_none() {
+    if !logged {
         let _ = writeln!(
             out,
             "None: the run wrote no log (`--no-log`), and the plots are drawn from the log.\n"
@@ -583,9 +847,9 @@ pub fn report_markdown(
         out,
         "## Studies side by side\n\nThe studies' reported figures (as restated in the project's `shared/reference.md`) beside this run's. They are what the studies printed, not targets to force; where this run's conditions differ (speed command, terrain, controller), the numbers are not like for like.\n"
     );
-    for (k, r) in robots.iter().enumerate() {
+    for (k, r) in detail.iter().enumerate() {
         let n = r["name"].as_str().unwrap_or("?");
-        let info = robot_info(input.scenario_text, n);
+        let info = robot_info(scenario_text, n);
         let _ = writeln!(out, "### `{n}` ({})\n", info.model);
         let mut notes = Notes::default();
         let mut body = String::new();
@@ -625,14 +889,7 @@ mod tests {
 
     /// The report of `summary` for [`SCN`], without a log or figures.
     fn md_of(summary: &Value) -> String {
-        report_markdown(
-            &ReportInput {
-                summary,
-                scenario_text: SCN,
-                log: None,
-            },
-            &[],
-        )
+        render(summary, SCN, false, &[])
     }
 
     #[test]

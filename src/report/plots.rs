@@ -12,7 +12,7 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::ReportError;
+use super::input::ReportError;
 use super::series::RobotSeries;
 
 /// Plot size in pixels (PNG) and SVG user units.

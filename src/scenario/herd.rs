@@ -23,10 +23,10 @@
 
 use serde::Deserialize;
 
+use super::error::{Locator, ScenarioError};
 use super::format::{HerdLayout, HerdSpec, RobotSpec, ScenarioFile};
 use super::spans::path_key;
 use super::vary::{Variation, draw_rng, set_path};
-use super::{Locator, ScenarioError};
 
 /// The most robots a scenario may hold, herds included (scenarios/README.md).
 /// `quadsim check` of 10,000 trotting quad16 takes some 7 s and 1 GB.

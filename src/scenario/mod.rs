@@ -4,8 +4,10 @@
 //! the line and column, and the key path of the offending value, also for
 //! values that fail validation after parsing (see [`ScenarioError`]).
 
+pub mod error;
 pub mod format;
 pub mod herd;
+pub mod push;
 pub mod sensing;
 pub mod spans;
 pub mod validate;
@@ -13,23 +15,8 @@ pub mod vary;
 
 use std::path::{Path, PathBuf};
 
+pub use error::{Locator, ScenarioError};
 pub use format::{FORMAT_VERSION, ScenarioFile};
-
-/// An error in a scenario file, located by line, column and key path.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{}:{line}:{column}: {}{message}", file.display(), if key_path.is_empty() { String::new() } else { format!("{key_path}: ") })]
-pub struct ScenarioError {
-    /// The scenario file.
-    pub file: PathBuf,
-    /// 1-based line (0 when unknown).
-    pub line: usize,
-    /// 1-based column (0 when unknown).
-    pub column: usize,
-    /// Key path of the value, e.g. `robots[0].controller.kind`.
-    pub key_path: String,
-    /// What is wrong.
-    pub message: String,
-}
 
 /// A parsed, validated scenario with its source text.
 #[derive(Debug)]
@@ -42,52 +29,6 @@ pub struct Scenario {
     pub name: String,
     /// The parsed contents.
     pub file: ScenarioFile,
-}
-
-/// Locates errors in one source text.
-#[derive(Debug, Clone, Copy)]
-pub struct Locator<'a> {
-    /// The file name to report.
-    pub path: &'a Path,
-    /// The source text.
-    pub src: &'a str,
-}
-
-impl Locator<'_> {
-    /// An error at a key path (its span is looked up in the source).
-    pub fn at(&self, key_path: &str, message: impl Into<String>) -> ScenarioError {
-        let (line, column) = spans::span_of_path(self.src, key_path)
-            .map_or((0, 0), |s| spans::line_col(self.src, s.start));
-        ScenarioError {
-            file: self.path.to_path_buf(),
-            line,
-            column,
-            key_path: key_path.to_string(),
-            message: message.into(),
-        }
-    }
-
-    /// An error at a byte span (parse errors).
-    pub fn at_span(
-        &self,
-        span: Option<std::ops::Range<usize>>,
-        message: impl Into<String>,
-    ) -> ScenarioError {
-        let (line, column, key_path) = match span {
-            Some(s) => {
-                let (l, c) = spans::line_col(self.src, s.start);
-                (l, c, spans::key_path_at(self.src, s.start))
-            }
-            None => (0, 0, String::new()),
-        };
-        ScenarioError {
-            file: self.path.to_path_buf(),
-            line,
-            column,
-            key_path,
-            message: message.into(),
-        }
-    }
 }
 
 /// Reads, parses and validates a scenario file.
@@ -108,7 +49,7 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, ScenarioError> {
 /// Parses and validates scenario text (`path` names it in errors and resolves relative paths).
 pub fn parse_scenario(path: &Path, src: String) -> Result<Scenario, ScenarioError> {
     let loc = Locator { path, src: &src };
-    if let Some(kind) = crate::study::file_kind(&src) {
+    if let Some(kind) = file_kind(&src) {
         return Err(loc.at(
             "kind",
             format!(
@@ -174,4 +115,16 @@ fn check_format_version(loc: &Locator<'_>) -> Result<(), ScenarioError> {
         )),
         _ => Err(loc.at("format_version", format!("must be the integer {FORMAT_VERSION}"))),
     }
+}
+
+/// The top-level `kind` of a TOML file, if it has one (studies do, scenarios do not).
+pub fn file_kind(src: &str) -> Option<String> {
+    let doc = toml::de::DeTable::parse(src).ok()?;
+    doc.get_ref()
+        .iter()
+        .find(|(k, _)| k.get_ref().as_ref() == "kind")
+        .and_then(|(_, v)| match v.get_ref() {
+            toml::de::DeValue::String(s) => Some(s.to_string()),
+            _ => None,
+        })
 }

@@ -2,9 +2,9 @@
 //! between sections, and the keys each `kind` accepts. Every error names the
 //! key path, which [`super::Locator`] turns into a line and column.
 
+use super::error::{Locator, ScenarioError};
 use super::format::{GroundSpec, ScenarioFile};
 use super::spans::path_key;
-use super::{Locator, ScenarioError};
 use std::collections::BTreeMap;
 
 /// The domain a numeric key must lie in.
@@ -374,7 +374,7 @@ pub fn validate(loc: &Locator<'_>, f: &ScenarioFile) -> Result<(), ScenarioError
     if let Some(patterns) = &f.log.robots {
         for (i, pat) in patterns.iter().enumerate() {
             let kp = format!("log.robots[{i}]");
-            let m = crate::log::select::RobotPattern::new(pat).map_err(|e| loc.at(&kp, e))?;
+            let m = crate::names::RobotPattern::new(pat).map_err(|e| loc.at(&kp, e))?;
             if !robot_names.iter().any(|n| m.matches(n)) {
                 return Err(loc.at(&kp, format!("'{pat}' matches no robot")));
             }
@@ -416,7 +416,7 @@ fn analysis(
         ));
     }
     if let Some(d) = &a.push_direction
-        && crate::analysis::PushDirection::from_name(d).is_none()
+        && super::push::PushDirection::from_name(d).is_none()
     {
         return Err(loc.at(
             &format!("{p}.push_direction"),

@@ -139,10 +139,7 @@ impl Variation {
 /// A random stream for draw `path` of variant `variant` (independent of the
 /// order of variants and paths).
 pub fn draw_rng(seed: u64, variant: &str, path: &str) -> ChaCha8Rng {
-    ChaCha8Rng::seed_from_u64(crate::world::stream_seed(
-        seed,
-        &format!("{variant}/{path}"),
-    ))
+    ChaCha8Rng::seed_from_u64(crate::seed::stream_seed(seed, &format!("{variant}/{path}")))
 }
 
 /// One segment of a path: a key, optionally indexed (`robots[2]`).

@@ -103,7 +103,7 @@ fn pairs(
         .filter(|(r, _)| r["status"] == "ok")
         .filter_map(|(r, f)| {
             let x = r["params"][path].as_f64()?;
-            let y = super::output::metric_number(f.get(metric)?)?;
+            let y = metric_number(f.get(metric)?)?;
             (x.is_finite() && y.is_finite()).then_some((x, y))
         })
         .collect()
@@ -234,6 +234,14 @@ fn load_section(
         None => s += "No unloaded (0 kg) run to compare with.\n",
     }
     s
+}
+
+/// A flattened metric as a number for plots and correlations (`true` = 1).
+pub fn metric_number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Bool(b) => Some(f64::from(u8::from(*b))),
+        v => v.as_f64(),
+    }
 }
 
 #[cfg(test)]

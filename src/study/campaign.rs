@@ -788,7 +788,7 @@ impl Prepared {
                 world.sim.run_pass(left);
             }
             step = next;
-            crate::cli::run::check_finite(&world).map_err(|e| e.to_string())?;
+            crate::divergence::check_finite(&world).map_err(|e| e.to_string())?;
             let (t, x) = forward(&world);
             let r = world.sim.robot_mut(root).expect("compiled");
             trace.push((t, x, r.run.commanded_distance_m.0));

@@ -21,15 +21,20 @@
 pub mod analysis;
 pub mod campaign;
 pub mod campaign_output;
+pub mod error;
 pub mod optimize;
 pub mod output;
 pub mod sample;
+pub mod variant;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use serde_json::Value;
+
+pub use error::StudyError;
+pub use sample::SweepSpec;
+pub use variant::{VariantResult, run_source, with_values};
 
 use crate::scenario::spans::path_key;
 use crate::scenario::vary::{Variation, set_path};
@@ -59,19 +64,6 @@ pub struct StudyFile {
     pub report: analysis::StudyReportSpec,
 }
 
-/// `[sweep]`.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SweepSpec {
-    /// `grid` (default: every combination), `cycle` (variant k takes value
-    /// k mod len of each), `random` or `lhs` (Latin hypercube) samples.
-    pub combine: Option<String>,
-    /// Number of variants for `random`, `lhs` and `cycle` (cycle's default: the longest list).
-    pub samples: Option<usize>,
-    /// Seed of random and Latin-hypercube samples (default 0).
-    pub seed: Option<u64>,
-}
-
 /// A loaded study: the file, its base scenario's text, and its variants.
 #[derive(Debug)]
 pub struct Study {
@@ -91,17 +83,7 @@ pub struct Study {
     pub variants: Vec<BTreeMap<String, toml::Value>>,
 }
 
-/// The top-level `kind` of a TOML file, if it has one (studies do, scenarios do not).
-pub fn file_kind(src: &str) -> Option<String> {
-    let doc = toml::de::DeTable::parse(src).ok()?;
-    doc.get_ref()
-        .iter()
-        .find(|(k, _)| k.get_ref().as_ref() == "kind")
-        .and_then(|(_, v)| match v.get_ref() {
-            toml::de::DeValue::String(s) => Some(s.to_string()),
-            _ => None,
-        })
-}
+pub use crate::scenario::file_kind;
 
 /// A study file's text; an unreadable file is an error naming it.
 pub fn read_study_text(path: &Path) -> Result<String, ScenarioError> {
@@ -250,58 +232,9 @@ fn check_path(
     Ok(())
 }
 
-/// The base scenario's text with `values` set at their paths.
-pub fn with_values(
-    base_source: &str,
-    values: &BTreeMap<String, toml::Value>,
-) -> Result<String, String> {
-    let mut t: toml::Table = toml::from_str(base_source).map_err(|e| e.to_string())?;
-    for (p, v) in values {
-        set_path(&mut t, p, v.clone())?;
-    }
-    toml::to_string(&t).map_err(|e| e.to_string())
-}
-
 /// The scenario text of variant `k`: the base with the variant's values set.
-pub fn variant_source(study: &Study, k: usize) -> Result<String, String> {
+pub fn variant_source(study: &Study, k: usize) -> Result<String, StudyError> {
     with_values(&study.base_source, &study.variants[k])
-}
-
-/// One variant's outcome.
-#[derive(Debug, Clone)]
-pub struct VariantResult {
-    /// Variant number.
-    pub index: usize,
-    /// Its varied values.
-    pub params: BTreeMap<String, toml::Value>,
-    /// `summary.json` of the run without `timing`, or the error that stopped it.
-    pub outcome: Result<Value, String>,
-}
-
-/// Runs a scenario text (relative paths resolved from `base_path`) to the
-/// end on one thread; `summary.json` without `timing`, or the error that
-/// stopped it (a divergence is an error).
-pub fn run_source(base_path: &Path, src: String, duration_s: Option<f64>) -> Result<Value, String> {
-    let scn = parse_scenario(base_path, src).map_err(|e| e.message_with_path())?;
-    let mut world = crate::world::build_world(
-        &scn,
-        crate::world::Overrides {
-            duration_s,
-            threads: 1,
-            ..Default::default()
-        },
-    )
-    .map_err(|e| e.message_with_path())?;
-    let mut done = 0;
-    while done < world.steps {
-        // passes of several steps (the same bits as one step at a time);
-        // a divergence is reported at the step it happened
-        done += world.sim.run_pass(world.steps - done);
-        crate::cli::run::check_finite(&world).map_err(|e| e.to_string())?;
-    }
-    let mut s = crate::cli::run::summary_json(&scn, &world, 0.0, 1);
-    s.as_object_mut().expect("object").remove("timing");
-    Ok(s)
 }
 
 /// Runs variant `k` to the end on one thread (errors are recorded, not raised).
@@ -313,16 +246,5 @@ pub fn run_variant(study: &Study, k: usize) -> VariantResult {
         index: k,
         params,
         outcome,
-    }
-}
-
-impl ScenarioError {
-    /// `key path: message` (the variant's scenario text has no useful line).
-    pub fn message_with_path(&self) -> String {
-        if self.key_path.is_empty() {
-            self.message.clone()
-        } else {
-            format!("{}: {}", self.key_path, self.message)
-        }
     }
 }

@@ -33,9 +33,11 @@ use std::sync::Mutex;
 use serde::Deserialize;
 use serde_json::{Value, json};
 
+use super::error::StudyError;
 use crate::scenario::spans::path_key;
 use crate::scenario::vary::set_path;
 use crate::scenario::{Locator, ScenarioError, parse_scenario};
+use crate::summary::Summary;
 
 /// `[optimize]`.
 #[derive(Debug, Clone, Deserialize)]
@@ -111,7 +113,7 @@ pub struct Evaluation {
     /// Objective.
     pub objective: f64,
     /// Summary without timing, or the error.
-    pub outcome: Result<Value, String>,
+    pub outcome: Result<Summary, StudyError>,
 }
 
 /// Reads and checks an optimisation file: bounds, budget, and that the base
@@ -193,22 +195,30 @@ fn current_value(base: &toml::Table, path: &str) -> Option<f64> {
 }
 
 /// The objective of a finished run (see the module docs).
-pub fn objective(summary: &Value, margin_weight_per_m: f64) -> f64 {
-    let r = &summary["robots"][0];
-    let num = |k: &str| r[k].as_f64();
-    let (Some(e), Some(d), Some(m)) = (num("energy_j"), num("distance_m"), num("total_mass_kg"))
-    else {
+pub fn objective(summary: &Summary, margin_weight_per_m: f64) -> f64 {
+    let Some(r) = summary.robots.first() else {
         return FAILED_OBJECTIVE;
     };
+    let (e, d, m) = (r.energy_j, r.distance_m, r.total_mass_kg);
+    if !(e.is_finite() && d.is_finite() && m.is_finite()) {
+        return FAILED_OBJECTIVE;
+    }
     let cot = e / (d.max(1e-3) * m * 9.81);
-    let margin = num("min_stability_margin_m").unwrap_or(0.0);
+    let margin = r.min_stability_margin_m.unwrap_or(0.0);
     let mut j = cot - margin_weight_per_m * margin;
-    if r["fell"] == Value::Bool(true) {
-        let t = summary["sim_time_s"].as_f64().unwrap_or(1.0).max(1e-9);
-        let tf = num("fell_at_s").unwrap_or(0.0);
+    if r.fell {
+        let t = if summary.sim_time_s.is_finite() {
+            summary.sim_time_s
+        } else {
+            1.0
+        }
+        .max(1e-9);
+        let tf = r.fell_at_s.unwrap_or(0.0);
         j += 10.0 + 10.0 * (1.0 - tf / t).clamp(0.0, 1.0);
     }
-    if let (Some(v), Some(c)) = (num("mean_forward_speed_mps"), num("commanded_speed_mps"))
+    let v = r.mean_forward_speed_mps;
+    if let Some(c) = r.commanded_speed_mps
+        && v.is_finite()
         && c > 0.05
         && v < 0.9 * c
     {
@@ -333,8 +343,8 @@ pub fn results_json(opt: &Optimization, history: &[Evaluation]) -> Value {
             "generation": e.generation,
             "values": opt.params.iter().zip(&e.values).map(|((p, ..), v)| (p.clone(), json!(v))).collect::<serde_json::Map<String, Value>>(),
             "objective": e.objective,
-            "error": e.outcome.as_ref().err(),
-            "summary": e.outcome.as_ref().ok(),
+            "error": e.outcome.as_ref().err().map(ToString::to_string),
+            "summary": e.outcome.as_ref().ok().map(Summary::to_json),
         })
     };
     json!({

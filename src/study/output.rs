@@ -7,7 +7,8 @@ use std::path::Path;
 
 use serde_json::{Map, Value, json};
 
-use super::VariantResult;
+use super::analysis::metric_number;
+use super::variant::VariantResult;
 use crate::error::CliError;
 
 /// Version of `results.json`'s layout.
@@ -37,10 +38,10 @@ pub fn row_json(r: &VariantResult) -> Value {
         .collect();
     match &r.outcome {
         Ok(s) => {
-            json!({"variant": r.index, "params": params, "status": "ok", "error": null, "summary": s})
+            json!({"variant": r.index, "params": params, "status": "ok", "error": null, "summary": s.to_json()})
         }
         Err(e) => {
-            json!({"variant": r.index, "params": params, "status": "failed", "error": e, "summary": null})
+            json!({"variant": r.index, "params": params, "status": "failed", "error": e.to_string(), "summary": null})
         }
     }
 }
@@ -346,14 +347,6 @@ fn short(v: &Value) -> String {
     match v {
         Value::Number(n) if n.is_f64() => format!("{:.4}", n.as_f64().unwrap_or(f64::NAN)),
         other => cell(other),
-    }
-}
-
-/// A flattened metric as a number for plots and correlations (`true` = 1).
-pub fn metric_number(v: &Value) -> Option<f64> {
-    match v {
-        Value::Bool(b) => Some(f64::from(u8::from(*b))),
-        v => v.as_f64(),
     }
 }
 

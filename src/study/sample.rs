@@ -6,11 +6,24 @@ use std::collections::BTreeMap;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use serde::Deserialize;
 use toml::Value;
 
-use super::SweepSpec;
 use crate::scenario::vary::Variation;
 use crate::scenario::{Locator, ScenarioError};
+
+/// `[sweep]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// `grid` (default: every combination), `cycle` (variant k takes value
+    /// k mod len of each), `random` or `lhs` (Latin hypercube) samples.
+    pub combine: Option<String>,
+    /// Number of variants for `random`, `lhs` and `cycle` (cycle's default: the longest list).
+    pub samples: Option<usize>,
+    /// Seed of random and Latin-hypercube samples (default 0).
+    pub seed: Option<u64>,
+}
 
 /// Most variants a study may form.
 pub const MAX_VARIANTS: usize = 1_000_000;
