@@ -102,15 +102,22 @@ fn bench(c: &mut Criterion) {
     bench_mpc(c);
 }
 
-/// One convex-MPC solve over a trot's contact plan
-/// ([`quadsim_engine::control::mpc::trot_benchmark_problem`]).
+/// One convex-MPC solve (ADMM, warm-started) over a trot's sequence of
+/// problems 0.02 s apart, as the walker asks at 50 Hz
+/// ([`quadsim_engine::control::mpc::trot_benchmark_problem_at`]).
 fn bench_mpc(c: &mut Criterion) {
-    use quadsim_engine::control::mpc::{Mpc, MpcParams, trot_benchmark_problem};
+    use quadsim_engine::control::mpc::{Mpc, MpcParams, trot_benchmark_problem_at};
     let params = MpcParams::default();
-    let pb = trot_benchmark_problem(&params);
+    let problems: Vec<_> = (0..50)
+        .map(|s| trot_benchmark_problem_at(&params, 0.02 * s as f64))
+        .collect();
     let mut mpc = Mpc::new(params);
+    let mut s = 0;
     c.bench_function("mpc/trot_horizon10", |b| {
-        b.iter(|| black_box(mpc.solve(black_box(&pb)).unwrap()))
+        b.iter(|| {
+            s = (s + 1) % problems.len();
+            black_box(mpc.solve(black_box(&problems[s])).unwrap())
+        })
     });
 }
 

@@ -175,3 +175,29 @@ fn forces_keep_to_friction_and_bounds() {
     // the plan uses the friction it has: some foot pushes at the pyramid's edge
     assert!(pushed > 0.9 * mu, "largest fx/fz {pushed}");
 }
+
+/// ADMM (the default, warm-started) gives clarabel's plan: over 100 solves
+/// of a trot's sequence 0.02 s apart, every planned force of every step
+/// within 0.5 N (a stance foot carries 130–200 N; measured worst 0.15 N).
+#[test]
+fn admm_gives_clarabels_plan() {
+    use quadsim_engine::control::mpc::{MpcSolver, trot_benchmark_problem_at};
+    let params = MpcParams::default();
+    let mut admm = Mpc::new(params);
+    let mut clarabel = Mpc::new(MpcParams {
+        solver: MpcSolver::Clarabel,
+        ..params
+    });
+    let mut worst = 0.0f64;
+    for s in 0..100 {
+        let pb = trot_benchmark_problem_at(&params, 0.02 * s as f64);
+        admm.solve(&pb).unwrap();
+        clarabel.solve(&pb).unwrap();
+        for (a, c) in admm.planned_forces().iter().zip(clarabel.planned_forces()) {
+            for f in 0..MPC_FEET {
+                worst = worst.max((a[f] - c[f]).length());
+            }
+        }
+    }
+    assert!(worst < 0.5, "worst force difference {worst} N");
+}

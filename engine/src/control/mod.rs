@@ -3,6 +3,7 @@
 //! about its axis (the same τ that enters `M q̈ + C q̇ + g = τ + Jᵀ f_ext`).
 
 pub mod active_set;
+pub mod admm;
 pub mod force_qp;
 pub mod joint_pd;
 pub mod mpc;

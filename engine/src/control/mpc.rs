@@ -25,11 +25,14 @@
 //! `min ½ Uᵀ H U + gᵀ U`, `H = 2(B_qpᵀ L B_qp + α I)`, `g = 2 B_qpᵀ L (A_qp x₀ + c_qp − X_ref)`,
 //!
 //! subject to, per stance foot and step, `|f_x|, |f_y| ≤ μ f_z` (the
-//! pyramid in world axes) and `f_min ≤ f_z ≤ f_max`. It is solved by
-//! `clarabel` (interior point). Only the first step's forces are used; the
-//! plan is solved again at [`MpcParams::solve_every_s`] and at every
-//! touchdown and lift-off.
+//! pyramid in world axes) and `f_min ≤ f_z ≤ f_max`. It is solved by ADMM
+//! ([`super::admm`], warm-started from the last solve when the contact
+//! plan keeps its shape) or by `clarabel` (interior point, the reference:
+//! [`MpcSolver`]). Only the first step's forces are used; the plan is
+//! solved again at [`MpcParams::solve_every_s`] and at every touchdown and
+//! lift-off.
 
+use super::admm::{Admm, AdmmSettings};
 use glam::{DMat3, DVec3};
 
 /// Size of the state (no gravity state: gravity enters the affine term).
@@ -52,6 +55,18 @@ pub struct MpcParams {
     pub force_weight: f64,
     /// Bounds of a stance foot's normal force (N).
     pub normal_force_n: (f64, f64),
+    /// The QP solver.
+    pub solver: MpcSolver,
+}
+
+/// The solver of the MPC's condensed QP.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MpcSolver {
+    /// ADMM on the dense problem, warm-started ([`super::admm`]).
+    #[default]
+    Admm,
+    /// `clarabel`'s interior-point method (allocates; the reference).
+    Clarabel,
 }
 
 impl Default for MpcParams {
@@ -71,6 +86,7 @@ impl Default for MpcParams {
             ],
             force_weight: 3e-6,
             normal_force_n: (5.0, 1000.0),
+            solver: MpcSolver::Admm,
         }
     }
 }
@@ -193,6 +209,9 @@ pub struct Mpc {
     plan: Vec<[DVec3; MPC_FEET]>,
     /// Number of variables of the last solve.
     nu: usize,
+    /// The ADMM workspace and the variable layout of its last solve.
+    admm: Admm,
+    last_var_of: Vec<[usize; MPC_FEET]>,
 }
 
 impl Mpc {
@@ -214,6 +233,8 @@ impl Mpc {
             predicted: vec![[0.0; NX]; n],
             plan: vec![[DVec3::ZERO; MPC_FEET]; n],
             nu: 0,
+            admm: Admm::new(AdmmSettings::default()),
+            last_var_of: vec![[usize::MAX; MPC_FEET]; n],
         }
     }
 
@@ -367,21 +388,33 @@ impl Mpc {
         self.h.resize(nu * nu, 0.0);
         self.g.clear();
         self.g.resize(nu, 0.0);
+        // variables of steps ≤ k end at `ends[k]`: later forces do not act earlier
+        let mut ends = [0usize; 64];
+        let mut count = 0;
+        for k in 0..n.min(64) {
+            for f in 0..MPC_FEET {
+                if self.var_of[k][f] != usize::MAX {
+                    count = self.var_of[k][f] + 3;
+                }
+            }
+            ends[k] = count;
+        }
         for row in 0..rows {
             let l = w[row % NX];
             if l == 0.0 {
                 continue;
             }
-            let b = &self.bqp[row * nu..(row + 1) * nu];
+            let end = if row / NX < 64 { ends[row / NX] } else { nu };
+            let b = &self.bqp[row * nu..row * nu + end];
             let lf = l * self.free[row];
-            for i in 0..nu {
+            for i in 0..end {
                 let bi = b[i];
                 if bi == 0.0 {
                     continue;
                 }
                 self.g[i] += 2.0 * bi * lf;
                 let lbi = 2.0 * l * bi;
-                for jj in i..nu {
+                for jj in i..end {
                     self.h[i * nu + jj] += lbi * b[jj];
                 }
             }
@@ -389,7 +422,10 @@ impl Mpc {
         for i in 0..nu {
             self.h[i * nu + i] += 2.0 * self.params.force_weight;
         }
-        let u = self.solve_qp(pb, n, nu)?;
+        let u = match self.params.solver {
+            MpcSolver::Admm => self.solve_admm(pb, n, nu)?,
+            MpcSolver::Clarabel => self.solve_qp(pb, n, nu)?,
+        };
         // every step's forces and the predicted states
         for k in 0..n {
             for f in 0..MPC_FEET {
@@ -413,6 +449,47 @@ impl Mpc {
             }
         }
         Ok(self.first)
+    }
+
+    /// The condensed QP by ADMM, warm-started when the variables are those
+    /// of the last solve (the same feet at the same steps).
+    fn solve_admm(&mut self, pb: &MpcProblem, n: usize, nu: usize) -> Result<Vec<f64>, MpcError> {
+        let same = self.last_var_of[..n] == self.var_of[..n];
+        self.last_var_of[..n].copy_from_slice(&self.var_of[..n]);
+        self.admm.begin(nu, same);
+        let (fmin, fmax) = self.params.normal_force_n;
+        for k in 0..n {
+            for f in 0..MPC_FEET {
+                let v = self.var_of[k][f];
+                if v == usize::MAX {
+                    continue;
+                }
+                let mu = pb.steps[k].friction[f].max(0.0);
+                for (axis, sign) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)] {
+                    self.admm.push_row(&[(v + axis, sign), (v + 2, -mu)], 0.0);
+                }
+                self.admm.push_row(&[(v + 2, 1.0)], fmax);
+                self.admm.push_row(&[(v + 2, -1.0)], -fmin);
+            }
+        }
+        // P is filled in its upper triangle: mirror it for the solver
+        for i in 0..nu {
+            for j in 0..i {
+                self.h[i * nu + j] = self.h[j * nu + i];
+            }
+        }
+        match self.admm.solve(&self.h, &self.g) {
+            Ok(x) => Ok(x.to_vec()),
+            Err(e) => {
+                self.last_var_of[..n].fill([usize::MAX; MPC_FEET]);
+                Err(MpcError::Solver(e.to_string()))
+            }
+        }
+    }
+
+    /// Iterations of the last ADMM solve.
+    pub fn admm_iterations(&self) -> usize {
+        self.admm.iterations
     }
 
     /// The condensed QP by `clarabel`: returns the forces `U`.
@@ -492,17 +569,21 @@ impl Mpc {
 /// A trot's problem for timing a solve (criterion's `mpc/trot_horizon10`
 /// and `quadsim bench --planner mpc`): quad16's mass and an inertia of its
 /// size at 0.45 m, moving at 0.9 m/s toward a 1 m/s reference, the
-/// diagonal pairs swapping every five steps (about 60 force variables).
-pub fn trot_benchmark_problem(params: &MpcParams) -> MpcProblem {
+/// diagonal pairs swapping every 0.25 s (about 60 force variables), at
+/// time `t_s` of the gait (a sequence of solves 0.02 s apart is what the
+/// walker asks at 50 Hz: the plan shifts, and keeps its shape between the
+/// pairs' swaps).
+pub fn trot_benchmark_problem_at(params: &MpcParams, t_s: f64) -> MpcProblem {
     let n = params.horizon_steps.max(1);
     let mut pb = MpcProblem::with_horizon(n);
     pb.mass_kg = 28.0;
     pb.inertia_heading = DMat3::from_diagonal(DVec3::new(0.5, 1.6, 1.8));
+    let wobble = (t_s * std::f64::consts::TAU * 4.0).sin();
     pb.state = MpcState {
-        rpy: DVec3::new(0.01, -0.02, 0.1),
-        com_m: DVec3::new(0.0, 0.0, 0.45),
-        omega_world_radps: DVec3::new(0.1, -0.05, 0.0),
-        com_velocity_mps: DVec3::new(0.9, 0.05, -0.1),
+        rpy: DVec3::new(0.01 * wobble, -0.02, 0.1),
+        com_m: DVec3::new(0.9 * t_s, 0.0, 0.45 + 0.01 * wobble),
+        omega_world_radps: DVec3::new(0.1 * wobble, -0.05, 0.0),
+        com_velocity_mps: DVec3::new(0.9 + 0.2 * wobble, 0.05, -0.1 * wobble),
     };
     let x0 = state_vector(&pb.state);
     for k in 0..n {
@@ -512,7 +593,8 @@ pub fn trot_benchmark_problem(params: &MpcParams) -> MpcProblem {
         r[3] += params.step_s * (k + 1) as f64;
         r[9] = 1.0;
         pb.reference[k] = r;
-        let a = (k / 5) % 2 == 0;
+        let t_mid = t_s + params.step_s * (k as f64 + 0.5);
+        let a = ((t_mid / 0.25).floor() as i64) % 2 == 0;
         pb.steps[k] = MpcStep {
             stance: [a, !a, !a, a],
             foot_m: [
@@ -525,6 +607,11 @@ pub fn trot_benchmark_problem(params: &MpcParams) -> MpcProblem {
         };
     }
     pb
+}
+
+/// [`trot_benchmark_problem_at`] at time 0.
+pub fn trot_benchmark_problem(params: &MpcParams) -> MpcProblem {
+    trot_benchmark_problem_at(params, 0.0)
 }
 
 /// The rotational inertia of the whole robot about its CoM (kg·m², world
