@@ -930,6 +930,13 @@ fn controller(
                 wp.swing_kp_nm_per_rad = kps;
                 wp.swing_kd_nms_per_rad = kds;
             }
+            // A pronk flies between its stances: without a planner asked for,
+            // it gets the MPC, which plans through the flight (quad16 at
+            // 0.5 m/s, 10 perturbed copies: VMC 10 fall, MPC 0;
+            // docs/validation.md, "Gaits").
+            if !has("planner") && wp.whole_body && wp.gait.kind() == GaitKind::Pronk {
+                wp.planner = Planner::Mpc;
+            }
             let w = Walker::new(desc, model, wp)
                 .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
             Ok(Controller::Walker(Box::new(w)))

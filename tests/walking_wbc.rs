@@ -7,7 +7,8 @@
 //! seed. Every neighbour must hold: no fall, the mean forward speed over
 //! [3 s, 8 s] within 5 % of the command, roll and pitch inside ±0.15 rad over
 //! the whole run (the command's ramp from rest included). The same holds
-//! for the convex-MPC planner (`planner = "mpc"`), at 1.0 and 1.25 m/s.
+//! for the convex-MPC planner (`planner = "mpc"`), at 1.0 and 1.25 m/s,
+//! and for the default walker's pace, bound and pronk at 0.5 m/s.
 
 use std::path::Path;
 
@@ -20,7 +21,7 @@ use rand_chacha::ChaCha8Rng;
 const NEIGHBOURS: u64 = 12;
 
 /// One neighbour's scenario: `v_mps` commanded, perturbations drawn from `case`.
-fn scenario(v_mps: f64, case: u64, planner: &str) -> String {
+fn scenario(v_mps: f64, case: u64, controller: &str) -> String {
     let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0000 + case);
     let mut u = |a: f64| rng.random_range(-a..=a);
     let (x, y, yaw) = (u(0.03), u(0.03), u(3.0));
@@ -47,7 +48,7 @@ contact_points = ["knees", "torso"]
 [robots.controller]
 kind = "vmc"
 v_x_mps = {v_mps}
-planner = "{planner}"
+{controller}
 "#,
         seed = case + 1,
         torso = 10.0 * mt,
@@ -58,8 +59,8 @@ planner = "{planner}"
 
 /// Runs one neighbour; returns (fell at, mean speed along the start heading
 /// over [3, 8] s, worst |roll| or |pitch|).
-fn run(v_mps: f64, case: u64, planner: &str) -> (Option<f64>, f64, f64) {
-    let src = scenario(v_mps, case, planner);
+fn run(v_mps: f64, case: u64, controller: &str) -> (Option<f64>, f64, f64) {
+    let src = scenario(v_mps, case, controller);
     let scn = parse_scenario(Path::new("walking_wbc.toml"), src).unwrap();
     let mut w = build_world(&scn, Overrides::with_threads(1)).unwrap();
     let id = w.robots[0].1;
@@ -79,10 +80,11 @@ fn run(v_mps: f64, case: u64, planner: &str) -> (Option<f64>, f64, f64) {
     (m.fell_at_s.filter(|_| m.fell), along / 5.0, tilt)
 }
 
-fn all_neighbours_hold(v_mps: f64, planner: &str) {
+/// `controller`: extra `[robots.controller]` keys.
+fn all_neighbours_hold(v_mps: f64, controller: &str) {
     let mut bad = Vec::new();
     for case in 0..NEIGHBOURS {
-        let (fell, speed, tilt) = run(v_mps, case, planner);
+        let (fell, speed, tilt) = run(v_mps, case, controller);
         let ok = fell.is_none() && (speed - v_mps).abs() <= 0.05 * v_mps && tilt < 0.15;
         if !ok {
             bad.push((case, fell, speed, tilt));
@@ -90,27 +92,34 @@ fn all_neighbours_hold(v_mps: f64, planner: &str) {
     }
     assert!(
         bad.is_empty(),
-        "{} of {NEIGHBOURS} neighbours failed at {v_mps} m/s under {planner} (case, fell at, speed, tilt): {bad:?}",
+        "{} of {NEIGHBOURS} neighbours failed at {v_mps} m/s with {controller:?} (case, fell at, speed, tilt): {bad:?}",
         bad.len()
     );
 }
 
 #[test]
 fn default_walker_trots_half_a_metre_per_second_from_every_neighbour() {
-    all_neighbours_hold(0.5, "vmc");
+    all_neighbours_hold(0.5, "");
 }
 
 #[test]
 fn default_walker_trots_one_metre_per_second_from_every_neighbour() {
-    all_neighbours_hold(1.0, "vmc");
+    all_neighbours_hold(1.0, "");
 }
 
 #[test]
 fn mpc_planner_trots_one_metre_per_second_from_every_neighbour() {
-    all_neighbours_hold(1.0, "mpc");
+    all_neighbours_hold(1.0, "planner = \"mpc\"");
 }
 
 #[test]
 fn mpc_planner_trots_one_and_a_quarter_metres_per_second_from_every_neighbour() {
-    all_neighbours_hold(1.25, "mpc");
+    all_neighbours_hold(1.25, "planner = \"mpc\"");
+}
+
+#[test]
+fn default_walker_paces_bounds_and_pronks_half_a_metre_per_second_from_every_neighbour() {
+    for gait in ["pace", "bound", "pronk"] {
+        all_neighbours_hold(0.5, &format!("gait = \"{gait}\""));
+    }
 }
