@@ -9,6 +9,7 @@ pub mod actuators;
 pub mod analysis;
 pub mod cli;
 pub mod error;
+pub mod foxglove_live;
 pub mod heightmap;
 pub mod limits;
 pub mod log;
