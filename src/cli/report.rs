@@ -15,7 +15,7 @@ use sha2::{Digest, Sha256};
 
 use crate::error::{CliError, bad};
 use crate::log::METRICS_SUFFIX;
-use crate::log::read::{LogContents, read_log_topics};
+use crate::log::read::{LogContents, read_log_messages};
 
 /// Arguments of `quadsim report`.
 #[derive(Debug, Args)]
@@ -29,8 +29,8 @@ pub struct ReportArgs {
 
 /// Runs `quadsim report`.
 pub fn run(a: ReportArgs) -> Result<(), CliError> {
-    let contents =
-        read_log_topics(&a.log, &crate::report::needs_topic).map_err(|e| bad(e.to_string()))?;
+    let contents = read_log_messages(&a.log, &crate::report::filmstrip::report_filter())
+        .map_err(|e| bad(e.to_string()))?;
     let summary =
         summary_from_log(&contents).map_err(|e| bad(format!("{}: {e}", a.log.display())))?;
     let out = a.out.clone().unwrap_or_else(|| {

@@ -792,9 +792,9 @@ fn write_run_report(
 ) -> Result<crate::report::ReportFiles, CliError> {
     let contents = if logged {
         Some(
-            crate::log::read::read_log_topics(
+            crate::log::read::read_log_messages(
                 &out_dir.join(crate::log::LOG_FILE),
-                &crate::report::needs_topic,
+                &crate::report::filmstrip::report_filter(),
             )
             .map_err(|e| bad(e.to_string()))?,
         )

@@ -8,6 +8,7 @@
 //! - [`markdown`]: the text: run header, metrics, plots, the studies side by side.
 
 pub mod actuators;
+pub mod filmstrip;
 pub mod markdown;
 pub mod plots;
 pub mod series;
@@ -183,6 +184,8 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
     let plots_dir = out_dir.join(PLOTS_DIR);
     let mut plot_files = Vec::new();
     let mut figures: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    let mut pictures = Vec::new();
+    let mut filmstrips = 0;
     if let Some(log) = input.log {
         for name in &robots {
             let s = series::RobotSeries::from_log(log, name).map_err(|m| ReportError {
@@ -230,9 +233,31 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
                 .map(|(caption, f)| (caption.clone(), crate::names::safe_file_stem(&f.stem)))
                 .collect();
             figures.push((name.clone(), links));
+            if filmstrips < filmstrip::MAX_ROBOTS
+                && let Some((picture, file)) = filmstrip::robot_filmstrip(log, &s, &plots_dir)?
+            {
+                pictures.push(picture);
+                plot_files.push(file);
+                filmstrips += 1;
+            }
+        }
+        if robots.len() > 1
+            && std::fs::create_dir_all(&plots_dir).is_ok()
+            && let Some((picture, file)) = filmstrip::world_snapshot(log, &robots, &plots_dir)?
+        {
+            pictures.push(picture);
+            plot_files.push(file);
         }
     }
-    let text = markdown::report_markdown(input, &figures);
+    let mut text = markdown::report_markdown(input, &figures);
+    if input.log.is_some() {
+        // the pictures before the plots
+        let motion = filmstrip::markdown(&pictures, robots.len(), filmstrips);
+        match text.find("\n## Plots\n") {
+            Some(at) => text.insert_str(at, &motion),
+            None => text.push_str(&motion),
+        }
+    }
     let path = out_dir.join(REPORT_FILE);
     std::fs::write(&path, text).map_err(|e| ReportError {
         path: path.display().to_string(),
