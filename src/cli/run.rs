@@ -366,14 +366,17 @@ fn start_monitor(
     if a.no_monitor {
         return Ok(None);
     }
+    let control_every = world
+        .sim
+        .world
+        .get_resource::<quadsim_components::ControlRate>()
+        .map_or(1, |c| c.every_steps.max(1));
     let every = match a.monitor_every {
         Some(0) => return Err(bad("--monitor-every: must be ≥ 1 (steps)")),
         Some(n) => n,
-        None => world
-            .sim
-            .world
-            .get_resource::<quadsim_components::ControlRate>()
-            .map_or(1, |c| c.every_steps.max(1)),
+        // a lockstep commander answers every controller tick
+        None if a.lockstep => control_every,
+        None => crate::monitor::default_every_steps(world.dt_s, control_every),
     };
     let name = a
         .world_name
