@@ -379,6 +379,10 @@ impl Live {
             }
             samples.push((f.robot_index as usize, s));
         }
+        if samples.is_empty() {
+            // no scene yet: the robots are not known
+            return;
+        }
         if let Some(tf) = self.channel(TF_TOPIC, Schema::FrameTransforms)
             && tf.has_sinks()
         {

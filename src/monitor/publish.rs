@@ -293,7 +293,7 @@ impl FramePublisher {
     }
 
     /// Publishes the header describing `robots` (JSON, see docs/monitor.md),
-    /// and their scene to live 3D viewers ([`Self::publish_scene`]).
+    /// and their scene to live 3D viewers (when one is subscribed).
     pub fn publish_header_at(&self, t_ns: u64, robots: &[RobotInfo]) {
         self.publish_header(robots);
         if let Ok(mut last) = self.robots.lock() {

@@ -72,6 +72,9 @@ type Poses = BTreeMap<String, (DVec3, DQuat)>;
 /// Parent of every frame id (the world has none).
 type Parents = BTreeMap<String, String>;
 
+/// The scene's boxes by frame id: (pose in the frame, size (m)).
+type Boxes = BTreeMap<String, Vec<((DVec3, DQuat), DVec3)>>;
+
 fn v3(v: &Value) -> DVec3 {
     let g = |k: &str| v[k].as_f64().unwrap_or(0.0);
     DVec3::new(g("x"), g("y"), g("z"))
@@ -128,8 +131,8 @@ fn world_poses(m: &LogMessage) -> Option<(Poses, Parents)> {
 }
 
 /// Boxes of the scene by frame id: (pose in the frame, size).
-fn scene_boxes(log: &LogContents) -> BTreeMap<String, Vec<((DVec3, DQuat), DVec3)>> {
-    let mut out: BTreeMap<String, Vec<_>> = BTreeMap::new();
+fn scene_boxes(log: &LogContents) -> Boxes {
+    let mut out = Boxes::new();
     let Some(scene) = log.topic("/scene").last().and_then(|m| m.json().ok()) else {
         return out;
     };
@@ -291,12 +294,7 @@ fn box_edges(pose: (DVec3, DQuat), size: DVec3) -> Vec<(DVec3, DVec3)> {
 }
 
 /// Robot `robot`'s pose from one `/tf` message's world poses.
-fn robot_pose(
-    robot: &str,
-    poses: &Poses,
-    parents: &Parents,
-    boxes: &BTreeMap<String, Vec<((DVec3, DQuat), DVec3)>>,
-) -> Option<Pose3> {
+fn robot_pose(robot: &str, poses: &Poses, parents: &Parents, boxes: &Boxes) -> Option<Pose3> {
     let prefix = format!("{robot}/");
     let mut p = Pose3::default();
     let mut found = false;
