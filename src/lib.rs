@@ -10,6 +10,7 @@ pub mod analysis;
 pub mod cli;
 pub mod divergence;
 pub mod error;
+pub mod foxglove_live;
 pub mod heightmap;
 pub mod limits;
 pub mod log;

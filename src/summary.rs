@@ -91,6 +91,20 @@ pub struct Timing {
     /// Live frames dropped.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub monitor_dropped: Option<u64>,
+    /// The pace `--real-time` asked for (simulated seconds per second).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "de_opt_f64"
+    )]
+    pub real_time_factor_asked: Option<f64>,
+    /// How far the paced run fell behind wall-clock time at most (s).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "de_opt_f64"
+    )]
+    pub real_time_max_lag_s: Option<f64>,
     /// External commands applied.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub commands_applied: Option<u64>,
@@ -368,6 +382,8 @@ impl Summary {
                 .threads(),
             monitor_published: None,
             monitor_dropped: None,
+            real_time_factor_asked: None,
+            real_time_max_lag_s: None,
             commands_applied: None,
             commands_rejected: None,
         });

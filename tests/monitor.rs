@@ -134,8 +134,8 @@ fn frames_arrive_in_order_with_the_logs_values() {
     let every = header["every_steps"].as_u64().unwrap();
     let dt = header["dt_s"].as_f64().unwrap();
     assert_eq!(
-        every, 4,
-        "default: the controller period (500 Hz at 0.5 ms)"
+        every, 20,
+        "default: 100 Hz, five controller periods (500 Hz at 0.5 ms)"
     );
     // in order: strictly increasing ticks on the publishing grid
     for w in instants.windows(2) {

@@ -353,8 +353,14 @@ fn a_herd_report_aggregates_across_robots_and_keeps_their_models() {
     }
     assert!(!md.contains("()"), "a robot without its model");
     assert!(!md.contains("Neither study's robot"), "{md}");
+    // and the Motion section's pictures: filmstrips of the first detailed
+    // robots and one world snapshot
     let plots = std::fs::read_dir(dir.join("plots")).unwrap().count();
-    assert_eq!(plots, 4 * 2 * PLOTS.len(), "plot files");
+    assert_eq!(
+        plots,
+        4 * 2 * PLOTS.len() + quadsim::report::filmstrip::MAX_ROBOTS + 1,
+        "plot files"
+    );
     // the worst robots' table names a model in every row
     let worst = md.split("### Worst robots").nth(1).unwrap();
     let rows: Vec<&str> = worst

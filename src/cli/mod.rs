@@ -10,6 +10,7 @@ pub mod export;
 pub mod models;
 pub mod monitor;
 pub mod optimize;
+pub mod pace;
 pub mod replay;
 pub mod report;
 pub mod run;

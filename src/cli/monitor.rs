@@ -29,6 +29,57 @@ pub struct MonitorArgs {
     /// List the running worlds and exit.
     #[arg(long)]
     pub list: bool,
+    /// Serve the world live to Foxglove (WebSocket, the channels and
+    /// schemas of log.mcap) instead of the dashboard; worlds that end are
+    /// followed by the next without a restart.
+    #[arg(long)]
+    pub foxglove: bool,
+    /// Port of `--foxglove`'s server (0: any free port, printed).
+    #[arg(long, default_value_t = crate::foxglove_live::DEFAULT_PORT, requires = "foxglove")]
+    pub port: u16,
+    /// Address of `--foxglove`'s server (loopback unless you ask otherwise).
+    #[arg(long, default_value = "127.0.0.1", requires = "foxglove")]
+    pub host: String,
+    /// Instants `--foxglove` forwards per second of simulated time, or
+    /// `full` (every published instant).
+    #[arg(long, value_name = "HZ|full", requires = "foxglove")]
+    pub rate: Option<String>,
+    /// With `--foxglove`: exit when the world ends.
+    #[arg(long, requires = "foxglove")]
+    pub once: bool,
+}
+
+/// `quadsim monitor --foxglove`: serves worlds until interrupted (or, with
+/// `--once`, the first world's end).
+fn foxglove(a: &MonitorArgs) -> Result<(), CliError> {
+    let rate_hz = match a.rate.as_deref() {
+        None => Some(crate::foxglove_live::DEFAULT_RATE_HZ),
+        Some("full") => None,
+        Some(r) => match r.parse::<f64>() {
+            Ok(hz) if hz.is_finite() && hz > 0.0 => Some(hz),
+            _ => {
+                return Err(bad(format!(
+                    "--rate: must be a rate > 0 (Hz) or `full`, got '{r}'"
+                )));
+            }
+        },
+    };
+    let server = crate::foxglove_live::Server::start(&a.host, a.port)?;
+    eprintln!(
+        "foxglove: ws://{}:{} (Foxglove: Open connection… → Foxglove WebSocket; layout docs/foxglove_layout.json)",
+        a.host, server.port
+    );
+    let opts = crate::foxglove_live::BridgeOptions {
+        world: a.world.clone(),
+        host: a.host.clone(),
+        port: server.port,
+        rate_hz,
+        once: a.once,
+    };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r = crate::foxglove_live::serve(&server, &opts, &stop);
+    server.stop();
+    r
 }
 
 fn monitor_error(e: crate::monitor::MonitorError) -> CliError {
@@ -78,6 +129,9 @@ pub fn run(a: MonitorArgs) -> Result<(), CliError> {
         )));
     }
     let timeout = Duration::from_secs_f64(a.timeout);
+    if a.foxglove {
+        return foxglove(&a);
+    }
     if a.list {
         for w in list_worlds().map_err(monitor_error)? {
             if !print_line(&w)? {

@@ -10,7 +10,7 @@
 use std::path::PathBuf;
 
 use crate::error::{CliError, bad};
-use crate::log::read::read_log_topics;
+use crate::log::read::read_log_messages;
 use crate::summary::Summary;
 use clap::Args;
 
@@ -26,8 +26,8 @@ pub struct ReportArgs {
 
 /// Runs `quadsim report`.
 pub fn run(a: ReportArgs) -> Result<(), CliError> {
-    let contents =
-        read_log_topics(&a.log, &crate::report::needs_topic).map_err(|e| bad(e.to_string()))?;
+    let contents = read_log_messages(&a.log, &crate::report::filmstrip::report_filter())
+        .map_err(|e| bad(e.to_string()))?;
     let summary =
         Summary::from_log(&contents).map_err(|e| bad(format!("{}: {e}", a.log.display())))?;
     let out = a.out.clone().unwrap_or_else(|| {

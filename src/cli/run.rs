@@ -75,6 +75,18 @@ pub struct RunArgs {
     /// Seconds to wait for a lockstep command before failing the run.
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     pub lockstep_timeout: f64,
+    /// Pace the run to wall-clock time: FACTOR simulated seconds per second
+    /// (1 when the flag has no value; 0.5 = half speed). Results are the
+    /// same bits as unpaced.
+    #[arg(long, value_name = "FACTOR", num_args = 0..=1, default_missing_value = "1.0")]
+    pub real_time: Option<f64>,
+    /// Serve the run live to Foxglove on this thread's side (as `quadsim
+    /// monitor --foxglove`, in-process; the simulation's bits are unchanged).
+    #[arg(long)]
+    pub foxglove: bool,
+    /// Port of `--foxglove`'s WebSocket server (127.0.0.1).
+    #[arg(long, default_value_t = crate::foxglove_live::DEFAULT_PORT, requires = "foxglove")]
+    pub foxglove_port: u16,
 }
 
 /// Arguments of `quadsim check`.
@@ -351,14 +363,17 @@ fn start_monitor(
     if a.no_monitor {
         return Ok(None);
     }
+    let control_every = world
+        .sim
+        .world
+        .get_resource::<quadsim_components::ControlRate>()
+        .map_or(1, |c| c.every_steps.max(1));
     let every = match a.monitor_every {
         Some(0) => return Err(bad("--monitor-every: must be ≥ 1 (steps)")),
         Some(n) => n,
-        None => world
-            .sim
-            .world
-            .get_resource::<quadsim_components::ControlRate>()
-            .map_or(1, |c| c.every_steps.max(1)),
+        // a lockstep commander answers every controller tick
+        None if a.lockstep => control_every,
+        None => crate::monitor::default_every_steps(world.dt_s, control_every),
     };
     let name = a
         .world_name
@@ -371,8 +386,16 @@ fn start_monitor(
         .iter()
         .map(|r| (r.name.clone(), r.model.clone()))
         .collect();
+    let scene = crate::monitor::WorldScene {
+        ground: crate::log::ground_mesh(&crate::world::ground_of(world)),
+        terrain: serde_json::to_string(&crate::log::terrain_description(scn)).unwrap_or_default(),
+    };
     let (sim, dt_s) = (&mut world.sim.world, world.dt_s);
-    match crate::monitor::RunMonitor::start(sim, &name, &robots, models, dt_s, every) {
+    // sampled only while watched, except in lockstep (a commander answers frames)
+    let always = a.lockstep;
+    match crate::monitor::RunMonitor::start_with(
+        sim, &name, &robots, models, dt_s, every, scene, always,
+    ) {
         Ok(m) => {
             if !a.quiet {
                 eprintln!("monitor: world '{name}' (quadsim monitor --world {name})");
@@ -525,11 +548,31 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     } else {
         None
     };
-    let monitor = start_monitor(a, &scn, &mut world)?;
+    let mut monitor = start_monitor(a, &scn, &mut world)?;
+    let foxglove = if a.foxglove {
+        let world_name = monitor.as_ref().map(|m| m.world.clone()).ok_or_else(|| {
+            bad("--foxglove: needs the live monitor (no --no-monitor, and shared memory)")
+        })?;
+        Some(crate::foxglove_live::spawn_bridge(
+            world_name,
+            a.foxglove_port,
+        )?)
+    } else {
+        None
+    };
+    let mut last_poll = Instant::now();
     let mut commands = start_commands(a, &world, monitor.as_ref())?;
+    let mut commanded = commands.as_ref().is_some_and(|c| c.active());
     let mut command_error = None;
     crate::log::interrupt::arm().map_err(bad)?;
+    let mut pacer = match a.real_time {
+        Some(f) => Some(super::pace::Pacer::new(f, world.dt_s)?),
+        None => None,
+    };
     let start = Instant::now();
+    if let Some(p) = &mut pacer {
+        p.restart();
+    }
     let chunk = (world.steps / 200).max(1);
     let mut done = 0;
     let mut outcome = crate::log::RunOutcome::default();
@@ -547,7 +590,9 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
                 // External commands arrive between steps: one step at a
                 // time then; otherwise passes of several steps where the
                 // log and the monitor allow (the same bits either way).
-                let max = if let Some(c) = &mut commands {
+                let max = if let Some(c) = &mut commands
+                    && commanded
+                {
                     if let Err(e) = c.before_step(&mut world, monitor.as_ref()) {
                         command_error = Some(e.to_string());
                         return true;
@@ -556,9 +601,21 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
                 } else {
                     left
                 };
+                let max = pacer.as_ref().map_or(max, |p| max.min(p.pass_steps));
                 let k = world.sim.run_pass(max);
                 left -= k;
                 done += k;
+                if let Some(p) = &mut pacer {
+                    p.wait(done);
+                }
+                // someone started or stopped watching (a cheap check, at most every 20 ms)
+                if let Some(m) = &mut monitor
+                    && last_poll.elapsed() >= std::time::Duration::from_millis(20)
+                {
+                    m.poll(&mut world.sim.world);
+                    commanded = commands.as_ref().is_some_and(|c| c.active());
+                    last_poll = Instant::now();
+                }
                 // A diverged robot is no longer stepped and the others go
                 // on; the run stops early only when every robot diverged.
                 if all_diverged(&world)
@@ -582,11 +639,42 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
     bar.finish_and_clear();
     crate::log::interrupt::clear();
     let wall = start.elapsed().as_secs_f64();
+    if let Some(p) = &pacer {
+        let got = p.achieved(done);
+        if !a.quiet || p.fell_behind() {
+            eprintln!(
+                "real time: {got:.3}× achieved ({}× asked{})",
+                p.factor,
+                if p.fell_behind() {
+                    format!(", up to {:.2} s behind", p.max_lag_s)
+                } else {
+                    String::new()
+                }
+            );
+        }
+    }
     let log_stats = match log {
         Some(log) => Some(log.finish(&mut world, &outcome)?),
         None => None,
     };
+    if let Some(m) = &monitor {
+        let t_ns = quadsim_systems::step_time_ns(world.sim.clock().step, world.dt_s);
+        m.publish_metrics(t_ns, || {
+            world
+                .robots
+                .iter()
+                .filter_map(|(name, root)| {
+                    let r = world.sim.robot(*root)?;
+                    let m = crate::summary::RobotSummary::in_world(&world, name, r).to_json();
+                    Some((name.clone(), serde_json::to_string(&m).ok()?))
+                })
+                .collect()
+        });
+    }
     let monitor_stats = monitor.map(|m| m.finish(&mut world.sim.world));
+    if let Some(f) = foxglove {
+        f.finish();
+    }
     if let Some(e) = command_error {
         return Err(bad(e));
     }
@@ -613,6 +701,10 @@ pub fn run_scenario(a: &RunArgs) -> Result<RunOutput, CliError> {
         if let Some(m) = &monitor_stats {
             t.monitor_published = Some(m.published());
             t.monitor_dropped = Some(m.dropped());
+        }
+        if let Some(p) = &pacer {
+            t.real_time_factor_asked = Some(p.factor);
+            t.real_time_max_lag_s = Some(p.max_lag_s);
         }
         if let Some(c) = &commands {
             t.commands_applied = Some(c.stats().applied);
@@ -690,9 +782,9 @@ fn write_run_report(
 ) -> Result<crate::report::ReportFiles, CliError> {
     let contents = if logged {
         Some(
-            crate::log::read::read_log_topics(
+            crate::log::read::read_log_messages(
                 &out_dir.join(crate::log::LOG_FILE),
-                &crate::report::needs_topic,
+                &crate::report::filmstrip::report_filter(),
             )
             .map_err(|e| bad(e.to_string()))?,
         )

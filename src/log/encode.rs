@@ -140,6 +140,36 @@ impl RobotNames {
     }
 }
 
+impl RobotNames {
+    /// The names of robot `robot` from its joints (velocity order), feet
+    /// (model order) and link frames `(parent frame id, link name)`: what
+    /// [`Self::new`] takes from a model, for a reader without one (the live
+    /// Foxglove bridge).
+    pub fn from_parts(
+        robot: &str,
+        joints: &[String],
+        feet: &[String],
+        frames: &[(String, String)],
+    ) -> Self {
+        RobotNames {
+            robot: robot.to_string(),
+            joints: joints.iter().flat_map(|n| string_field(2, n)).collect(),
+            feet: feet.iter().map(|n| string_field(1, n)).collect(),
+            frames: frames
+                .iter()
+                .map(|(parent, link)| {
+                    let mut b = string_field(2, parent);
+                    b.extend(string_field(3, &frame_id(robot, link)));
+                    b
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The frame id of the world, the base links' parent.
+pub const WORLD_FRAME: &str = WORLD;
+
 /// The frame id of a robot's link: `<robot>/<link>`.
 pub fn frame_id(robot: &str, link: &str) -> String {
     format!("{robot}/{link}")

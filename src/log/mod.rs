@@ -184,7 +184,7 @@ impl RunLog {
 }
 
 /// The `/terrain` message: the scenario's ground as written in the file.
-fn terrain_description(scn: &Scenario) -> Value {
+pub fn terrain_description(scn: &Scenario) -> Value {
     let table: toml::Table = scn.source.parse().unwrap_or_default();
     let world = table.get("world");
     let to_json = |v: Option<&toml::Value>| {

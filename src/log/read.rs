@@ -120,11 +120,20 @@ pub fn read_log(path: &Path) -> Result<LogContents, LogError> {
 /// Reads the log at `path`, keeping only the messages of topics for which
 /// `keep` holds (the others are still decompressed, but not copied).
 pub fn read_log_topics(path: &Path, keep: &dyn Fn(&str) -> bool) -> Result<LogContents, LogError> {
+    read_log_messages(path, &|topic, _| keep(topic))
+}
+
+/// Reads the log at `path`, keeping only the messages for which
+/// `keep(topic, log_time_ns)` holds (called in file order).
+pub fn read_log_messages(
+    path: &Path,
+    keep: &dyn Fn(&str, u64) -> bool,
+) -> Result<LogContents, LogError> {
     let buf = std::fs::read(path).map_err(|e| LogError {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;
-    let c = read_log_bytes_topics(&buf, keep);
+    let c = read_log_bytes_messages(&buf, keep);
     if c.messages.is_empty()
         && c.metadata.is_empty()
         && let Some(e) = &c.error
@@ -144,13 +153,19 @@ pub fn read_log_bytes(buf: &[u8]) -> LogContents {
 
 /// [`read_log_bytes`], keeping only the messages of topics for which `keep` holds.
 pub fn read_log_bytes_topics(buf: &[u8], keep: &dyn Fn(&str) -> bool) -> LogContents {
+    read_log_bytes_messages(buf, &|topic, _| keep(topic))
+}
+
+/// [`read_log_bytes`], keeping only the messages for which
+/// `keep(topic, log_time_ns)` holds (called in file order).
+pub fn read_log_bytes_messages(buf: &[u8], keep: &dyn Fn(&str, u64) -> bool) -> LogContents {
     let mut out = LogContents::default();
     let mut descriptors: BTreeMap<String, Option<MessageDescriptor>> = BTreeMap::new();
     match mcap::MessageStream::new_with_options(buf, Options::IgnoreEndMagic.into()) {
         Ok(stream) => {
             for m in stream {
                 match m {
-                    Ok(m) if !keep(&m.channel.topic) => {}
+                    Ok(m) if !keep(&m.channel.topic, m.log_time) => {}
                     Ok(m) => {
                         let schema = m.channel.schema.as_ref();
                         let name = schema.map_or_else(String::new, |s| s.name.clone());

@@ -96,6 +96,8 @@ pub struct CommandStats {
 /// The run's end of the commands service.
 pub struct CommandReceiver {
     subscriber: Subscriber<Svc, [RobotCommand], ()>,
+    port_factory:
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<Svc, [RobotCommand], ()>,
     _node: Node<Svc>,
     service: String,
     /// Wait for every external robot's command at each controller tick.
@@ -133,7 +135,7 @@ impl CommandReceiver {
             .signal_handling_mode(SignalHandlingMode::Disabled)
             .create::<Svc>()
             .map_err(|e| fail("cannot create an iceoryx2 node", &e))?;
-        let subscriber = node
+        let port_factory = node
             .service_builder(&service_name(&service)?)
             .publish_subscribe::<[RobotCommand]>()
             .max_publishers(MAX_COMMANDERS)
@@ -142,12 +144,14 @@ impl CommandReceiver {
             .history_size(0)
             .enable_safe_overflow(true)
             .create()
-            .map_err(|e| fail("cannot create the service", &e))?
+            .map_err(|e| fail("cannot create the service", &e))?;
+        let subscriber = port_factory
             .subscriber_builder()
             .create()
             .map_err(|e| fail("cannot create the subscriber", &e))?;
         Ok(Self {
             subscriber,
+            port_factory,
             _node: node,
             service,
             lockstep,
@@ -156,6 +160,15 @@ impl CommandReceiver {
             stats: CommandStats::default(),
             warned: false,
         })
+    }
+
+    /// Whether commands must be looked for before every step: in
+    /// lockstep, or while a commander is connected. Otherwise the run
+    /// steps in passes of several steps (stepping one at a time for
+    /// commands nobody sends cost a herd half its speed, issue 29 item 8).
+    pub fn active(&self) -> bool {
+        use iceoryx2::service::port_factory::PortFactory as _;
+        self.lockstep.is_some() || self.port_factory.dynamic_config().number_of_publishers() > 0
     }
 
     /// Counts so far.

@@ -4,19 +4,34 @@
 
 use std::any::Any;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::PortFactory as _;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use quadsim_systems::{LogRecord, LogSink, Records, RobotInfo, SampleView, ViewRecord};
 use serde_json::json;
 
 use super::frame::{LAYOUT_VERSION, MAX_DOF, MAX_FEET, RobotFrame, TYPE_NAME};
+use super::scene::{RobotPlan, SceneMessage};
 use super::service::{
     MAX_SUBSCRIBERS, MonitorError, SUBSCRIBER_BUFFER_FRAMES, cleanup_dead_nodes, frames_service,
-    header_service, node_name, service_name,
+    header_service, node_name, scene_service, service_name,
 };
+use crate::log::encode::{GroundMesh, encode_scene};
+
+/// What a live 3D view shows besides the robots: the ground as a mesh and
+/// the scenario's terrain description (the log's `/scene` and `/terrain`).
+#[derive(Debug, Clone, Default)]
+pub struct WorldScene {
+    /// The ground mesh of the log's `/scene`.
+    pub ground: GroundMesh,
+    /// The log's `/terrain` message (JSON text; empty: none).
+    pub terrain: String,
+}
 
 /// Counts of a publisher, shared with the run for its report.
 #[derive(Debug, Default)]
@@ -46,6 +61,9 @@ pub struct FramePublisher {
     // ports before the node: they must drop first
     frames: Publisher<Svc, [RobotFrame], ()>,
     header: Publisher<Svc, [u8], ()>,
+    scene: Publisher<Svc, [u8], ()>,
+    frames_service: PortFactory<Svc, [RobotFrame], ()>,
+    scene_service: PortFactory<Svc, [u8], ()>,
     _node: Node<Svc>,
     world: String,
     dt_s: f64,
@@ -53,6 +71,14 @@ pub struct FramePublisher {
     /// Model of each robot by instance name (the scenario's `robots[].model`).
     models: Vec<(String, String)>,
     stats: Arc<MonitorStats>,
+    world_scene: WorldScene,
+    /// The last robot list and its time (ns), kept to send the scene again
+    /// to a viewer that subscribes later.
+    robots: Mutex<Option<(u64, Vec<RobotInfo>)>>,
+    /// Scenes sent.
+    scenes: AtomicU64,
+    /// Subscribers of the scene service when it was last sent.
+    scene_readers: AtomicUsize,
 }
 
 impl std::fmt::Debug for FramePublisher {
@@ -101,8 +127,24 @@ impl FramePublisher {
             .allocation_strategy(AllocationStrategy::PowerOfTwo)
             .create()
             .map_err(|e| fail("cannot create the header publisher", &e))?;
+        let scene_service = node
+            .service_builder(&service_name(&scene_service(world))?)
+            .publish_subscribe::<[u8]>()
+            .max_publishers(1)
+            .max_subscribers(MAX_SUBSCRIBERS)
+            .subscriber_max_buffer_size(4)
+            .history_size(2)
+            .enable_safe_overflow(true)
+            .create()
+            .map_err(|e| fail("cannot create the scene service", &e))?;
+        let scene = scene_service
+            .publisher_builder()
+            .initial_max_slice_len(64 * 1024)
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
+            .create()
+            .map_err(|e| fail("cannot create the scene publisher", &e))?;
         let frames_name = service_name(&frames_service(world))?;
-        let frames = node
+        let frames_service = node
             .service_builder(&frames_name)
             .publish_subscribe::<[RobotFrame]>()
             .max_publishers(1)
@@ -111,7 +153,8 @@ impl FramePublisher {
             .history_size(0)
             .enable_safe_overflow(true)
             .create()
-            .map_err(|e| fail("cannot create the frames service", &e))?
+            .map_err(|e| fail("cannot create the frames service", &e))?;
+        let frames = frames_service
             .publisher_builder()
             .initial_max_slice_len(n_robots.max(1))
             .allocation_strategy(AllocationStrategy::Static)
@@ -121,13 +164,101 @@ impl FramePublisher {
         Ok(Self {
             frames,
             header,
+            scene,
+            frames_service,
+            scene_service,
             _node: node,
             world: world.to_string(),
             dt_s,
             every_steps,
             models,
             stats: Arc::default(),
+            world_scene: WorldScene::default(),
+            robots: Mutex::new(None),
+            scenes: AtomicU64::new(0),
+            scene_readers: AtomicUsize::new(0),
         })
+    }
+
+    /// Shows `scene` (ground, terrain) to live 3D viewers.
+    pub fn with_scene(mut self, scene: WorldScene) -> Self {
+        self.world_scene = scene;
+        self
+    }
+
+    /// Subscribers of the frames service now (readers, dashboards, bridges,
+    /// lockstep commanders).
+    pub fn frame_subscribers(&self) -> usize {
+        self.frames_service.dynamic_config().number_of_subscribers()
+    }
+
+    /// Sends the scene again when a viewer subscribed since it was last sent.
+    pub fn refresh_scene(&self) {
+        let readers = self.scene_service.dynamic_config().number_of_subscribers();
+        let before = self.scene_readers.swap(readers, Ordering::Relaxed);
+        if readers > before {
+            let _ = self.scene.update_connections();
+            let robots = self.robots.lock().map(|r| r.clone()).unwrap_or(None);
+            if let Some((t_ns, robots)) = robots {
+                self.publish_scene(t_ns, &robots);
+            }
+        }
+    }
+
+    /// Sends the scene of `robots` (the robot list at `t_ns`) to viewers:
+    /// each robot's link plan, the log's `/scene` and `/terrain` messages.
+    /// Encoded only when a viewer is subscribed.
+    fn publish_scene(&self, t_ns: u64, robots: &[RobotInfo]) {
+        let readers = self.scene_service.dynamic_config().number_of_subscribers();
+        self.scene_readers.store(readers, Ordering::Relaxed);
+        if readers == 0 {
+            return;
+        }
+        let version = self.scenes.fetch_add(1, Ordering::Relaxed);
+        let mut scene = Vec::new();
+        encode_scene(
+            robots,
+            &self.world_scene.ground,
+            t_ns,
+            version > 0,
+            &mut scene,
+        );
+        let msg = SceneMessage::Scene {
+            version,
+            t_ns,
+            robots: robots
+                .iter()
+                .map(|r| RobotPlan::new(&r.name, &r.model, r.joint_names(), r.foot_names()))
+                .collect(),
+            scene: String::from_utf8(scene).unwrap_or_default(),
+            terrain: self.world_scene.terrain.clone(),
+        };
+        self.send_scene_message(&msg);
+    }
+
+    /// Sends each robot's final metrics (`(robot, JSON text)`, made by
+    /// `robots` only when a viewer is subscribed) to viewers.
+    pub fn publish_metrics(&self, t_ns: u64, robots: impl FnOnce() -> Vec<(String, String)>) {
+        let _ = self.scene.update_connections();
+        if self.scene_service.dynamic_config().number_of_subscribers() == 0 {
+            return;
+        }
+        let robots = robots();
+        self.send_scene_message(&SceneMessage::Metrics { t_ns, robots });
+    }
+
+    fn send_scene_message(&self, msg: &SceneMessage) {
+        let Ok(bytes) = serde_json::to_vec(msg) else {
+            return;
+        };
+        let _ = self.scene.update_connections();
+        let Ok(sample) = self.scene.loan_slice_uninit(bytes.len()) else {
+            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
+            return;
+        };
+        if sample.write_from_slice(&bytes).send().is_err() {
+            self.stats.dropped.fetch_add(1, Ordering::Relaxed);
+        }
     }
 
     /// The counters (shared).
@@ -159,6 +290,16 @@ impl FramePublisher {
     #[inline]
     pub fn time_s(&self, tick: u64) -> f64 {
         tick as f64 * self.dt_s
+    }
+
+    /// Publishes the header describing `robots` (JSON, see docs/monitor.md),
+    /// and their scene to live 3D viewers (when one is subscribed).
+    pub fn publish_header_at(&self, t_ns: u64, robots: &[RobotInfo]) {
+        self.publish_header(robots);
+        if let Ok(mut last) = self.robots.lock() {
+            *last = Some((t_ns, robots.to_vec()));
+        }
+        self.publish_scene(t_ns, robots);
     }
 
     /// Publishes the header describing `robots` (JSON, see docs/monitor.md).
@@ -255,7 +396,7 @@ impl LogSink for MonitorSink {
 
     fn send(&mut self, record: LogRecord) {
         match record {
-            LogRecord::Robots { robots, .. } => self.publisher.publish_header(&robots),
+            LogRecord::Robots { robots, t_ns } => self.publisher.publish_header_at(t_ns, &robots),
             // never sent: the sink takes records (`send_records`)
             LogRecord::Step { .. } => {}
         }

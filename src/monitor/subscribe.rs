@@ -9,9 +9,10 @@ use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use serde_json::Value;
 
 use super::frame::{LAYOUT_VERSION, RobotFrame, TYPE_NAME};
+use super::scene::SceneMessage;
 use super::service::{
     MonitorError, SERVICE_PREFIX, cleanup_dead_nodes, frames_service, header_service, node_name,
-    service_name,
+    scene_service, service_name,
 };
 
 type Svc = ipc_threadsafe::Service;
@@ -42,6 +43,8 @@ pub fn list_worlds() -> Result<Vec<String>, MonitorError> {
 /// A subscriber to one world.
 pub struct FrameReader {
     frames: Subscriber<Svc, [RobotFrame], ()>,
+    frames_service:
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<Svc, [RobotFrame], ()>,
     header: Subscriber<Svc, [u8], ()>,
     _node: Node<Svc>,
     world: String,
@@ -101,7 +104,8 @@ impl FrameReader {
                 });
             }
         };
-        let frames = frames
+        let frames_service = frames;
+        let frames = frames_service
             .subscriber_builder()
             .create()
             .map_err(|e| MonitorError {
@@ -115,6 +119,7 @@ impl FrameReader {
             })?;
         Ok(Some(Self {
             frames,
+            frames_service,
             header,
             _node: node,
             world: world.to_string(),
@@ -146,6 +151,13 @@ impl FrameReader {
             }
             std::thread::sleep(Duration::from_millis(20));
         }
+    }
+
+    /// Whether the world's run is gone (its frames service has no
+    /// publisher; the service itself lives on while readers hold it).
+    pub fn ended(&self) -> bool {
+        use iceoryx2::service::port_factory::PortFactory as _;
+        self.frames_service.dynamic_config().number_of_publishers() == 0
     }
 
     /// The world's name.
@@ -219,5 +231,78 @@ impl FrameReader {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
+    }
+}
+
+/// A subscriber to one world's scene service (live 3D viewers): the robots'
+/// link plans and the scene, then the final metrics. Open it before the
+/// frames (a [`FrameReader`]), so the run sees the viewer when sampling
+/// starts.
+pub struct SceneReader {
+    scene: Subscriber<Svc, [u8], ()>,
+    _node: Node<Svc>,
+    world: String,
+}
+
+impl std::fmt::Debug for SceneReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SceneReader")
+            .field("world", &self.world)
+            .finish_non_exhaustive()
+    }
+}
+
+impl SceneReader {
+    /// Attaches to `world`'s scene; `Ok(None)` when it does not exist (yet).
+    pub fn open(world: &str) -> Result<Option<Self>, MonitorError> {
+        let node = NodeBuilder::new()
+            .name(&node_name("quadsim-viewer")?)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<Svc>()
+            .map_err(|e| MonitorError {
+                message: format!("cannot create an iceoryx2 node: {e:?}"),
+            })?;
+        let service = match node
+            .service_builder(&service_name(&scene_service(world))?)
+            .publish_subscribe::<[u8]>()
+            .open()
+        {
+            Ok(s) => s,
+            Err(PublishSubscribeOpenError::DoesNotExist) => return Ok(None),
+            Err(e) => {
+                return Err(MonitorError {
+                    message: format!("cannot open the scene of world '{world}': {e:?}"),
+                });
+            }
+        };
+        let scene = service
+            .subscriber_builder()
+            .create()
+            .map_err(|e| MonitorError {
+                message: format!("cannot subscribe to the scene of world '{world}': {e:?}"),
+            })?;
+        Ok(Some(Self {
+            scene,
+            _node: node,
+            world: world.to_string(),
+        }))
+    }
+
+    /// The next scene message, if one is queued.
+    pub fn try_next(&mut self) -> Result<Option<SceneMessage>, MonitorError> {
+        let Some(s) = self.scene.receive().map_err(|e| MonitorError {
+            message: format!("receiving the scene of world '{}': {e:?}", self.world),
+        })?
+        else {
+            return Ok(None);
+        };
+        serde_json::from_slice(s.payload())
+            .map(Some)
+            .map_err(|e| MonitorError {
+                message: format!(
+                    "world '{}' sent a scene that does not parse: {e}",
+                    self.world
+                ),
+            })
     }
 }

@@ -14,6 +14,13 @@ pub struct ReportError {
     pub message: String,
 }
 
+/// Whether the report needs a topic's messages (not the 3D scene and
+/// transforms, the largest part of a log): the filter for
+/// [`read_log_topics`](crate::log::read::read_log_topics).
+pub fn needs_topic(topic: &str) -> bool {
+    !matches!(topic, "/tf" | "/scene")
+}
+
 /// What a report is made of.
 #[derive(Debug, Clone, Copy)]
 pub struct ReportInput<'a> {

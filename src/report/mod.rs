@@ -8,6 +8,7 @@
 //! - [`markdown`]: the text: run header, metrics, plots, the studies side by side.
 
 pub mod actuators;
+pub mod filmstrip;
 pub mod input;
 pub mod markdown;
 pub mod plots;
@@ -15,7 +16,7 @@ pub mod series;
 
 use std::path::{Path, PathBuf};
 
-pub use input::{ReportError, ReportInput, RobotInfo, robot_info};
+pub use input::{ReportError, ReportInput, RobotInfo, needs_topic, robot_info};
 
 /// File name of the report in a run's output directory.
 pub const REPORT_FILE: &str = "report.md";
@@ -29,13 +30,6 @@ pub struct ReportFiles {
     pub markdown: PathBuf,
     /// Every plot file (SVG and PNG).
     pub plots: Vec<PathBuf>,
-}
-
-/// Whether the report needs a topic's messages (not the 3D scene and
-/// transforms, the largest part of a log): the filter for
-/// [`read_log_topics`](crate::log::read::read_log_topics).
-pub fn needs_topic(topic: &str) -> bool {
-    !matches!(topic, "/tf" | "/scene")
 }
 
 /// Writes `out_dir/report.md` and `out_dir/plots/<robot>_<plot>.{svg,png}`.
@@ -67,6 +61,8 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
     let plots_dir = out_dir.join(PLOTS_DIR);
     let mut plot_files = Vec::new();
     let mut figures: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    let mut pictures = Vec::new();
+    let mut filmstrips = 0;
     if let Some(log) = input.log {
         // a herd's plots: its worst robots that were logged, at most
         // `HERD_DETAIL_ROBOTS` of them
@@ -127,9 +123,32 @@ pub fn write_report(input: &ReportInput<'_>, out_dir: &Path) -> Result<ReportFil
                 .map(|(caption, f)| (caption.clone(), crate::names::safe_file_stem(&f.stem)))
                 .collect();
             figures.push((name.clone(), links));
+            if filmstrips < filmstrip::MAX_ROBOTS
+                && let Some((picture, file)) = filmstrip::robot_filmstrip(log, &s, &plots_dir)?
+            {
+                pictures.push(picture);
+                plot_files.push(file);
+                filmstrips += 1;
+            }
+        }
+        if robots.len() > 1
+            && std::fs::create_dir_all(&plots_dir).is_ok()
+            && let Some((picture, file)) = filmstrip::world_snapshot(log, &robots, &plots_dir)?
+        {
+            pictures.push(picture);
+            plot_files.push(file);
         }
     }
-    let text = markdown::report_markdown(input, &figures);
+    let mut text = markdown::report_markdown(input, &figures);
+    if input.log.is_some() {
+        // the pictures before the plots
+        let herd = robots.len() >= markdown::HERD_MIN_ROBOTS;
+        let motion = filmstrip::markdown(&pictures, robots.len(), filmstrips, herd);
+        match text.find("\n## Plots\n") {
+            Some(at) => text.insert_str(at, &motion),
+            None => text.push_str(&motion),
+        }
+    }
     let path = out_dir.join(REPORT_FILE);
     std::fs::write(&path, text).map_err(|e| ReportError {
         path: path.display().to_string(),

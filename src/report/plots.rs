@@ -21,10 +21,11 @@ pub const PLOT_SIZE: (u32, u32) = (900, 620);
 /// whole stride (the PNG would not show more, and it keeps drawing cheap).
 pub const MAX_POINTS: usize = 1500;
 
-const FONT: &str = "sans-serif";
+/// The bundled font's family name.
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Registers the bundled font once (plotters looks fonts up by family name).
-fn register_fonts() {
+pub(crate) fn register_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         for style in [FontStyle::Normal, FontStyle::Bold] {
