@@ -457,21 +457,13 @@ impl Mpc {
         let same = self.last_var_of[..n] == self.var_of[..n];
         self.last_var_of[..n].copy_from_slice(&self.var_of[..n]);
         self.admm.begin(nu, same);
-        let (fmin, fmax) = self.params.normal_force_n;
-        for k in 0..n {
-            for f in 0..MPC_FEET {
-                let v = self.var_of[k][f];
-                if v == usize::MAX {
-                    continue;
-                }
-                let mu = pb.steps[k].friction[f].max(0.0);
-                for (axis, sign) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)] {
-                    self.admm.push_row(&[(v + axis, sign), (v + 2, -mu)], 0.0);
-                }
-                self.admm.push_row(&[(v + 2, 1.0)], fmax);
-                self.admm.push_row(&[(v + 2, -1.0)], -fmin);
-            }
-        }
+        let admm = &mut self.admm;
+        constraint_rows(
+            &self.var_of[..n],
+            &pb.steps[..n],
+            self.params.normal_force_n,
+            |entries, bound| admm.push_row(entries, bound),
+        );
         // P is filled in its upper triangle: mirror it for the solver
         for i in 0..nu {
             for j in 0..i {
@@ -512,32 +504,20 @@ impl Mpc {
         }
         let p = CscMatrix::new(nu, nu, colptr, rowval, nzval);
         // constraints A u ≤ b: six rows per (step, stance foot)
-        let (fmin, fmax) = self.params.normal_force_n;
-        let m = 2 * nu;
         let mut a_cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nu];
-        let mut b = vec![0.0; m];
-        let mut row = 0;
-        for k in 0..n {
-            for f in 0..MPC_FEET {
-                let v = self.var_of[k][f];
-                if v == usize::MAX {
-                    continue;
+        let mut b = Vec::with_capacity(2 * nu);
+        constraint_rows(
+            &self.var_of[..n],
+            &pb.steps[..n],
+            self.params.normal_force_n,
+            |entries, bound| {
+                for &(col, x) in entries {
+                    a_cols[col].push((b.len(), x));
                 }
-                let mu = pb.steps[k].friction[f].max(0.0);
-                // ±f_x − μ f_z ≤ 0, ±f_y − μ f_z ≤ 0
-                for (axis, sign) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)] {
-                    a_cols[v + axis].push((row, sign));
-                    a_cols[v + 2].push((row, -mu));
-                    row += 1;
-                }
-                a_cols[v + 2].push((row, 1.0));
-                b[row] = fmax;
-                row += 1;
-                a_cols[v + 2].push((row, -1.0));
-                b[row] = -fmin;
-                row += 1;
-            }
-        }
+                b.push(bound);
+            },
+        );
+        let m = b.len();
         let mut colptr = Vec::with_capacity(nu + 1);
         let mut rowval = Vec::new();
         let mut nzval = Vec::new();
@@ -562,6 +542,30 @@ impl Mpc {
         match solver.solution.status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(solver.solution.x.clone()),
             s => Err(MpcError::Solver(format!("{s:?}"))),
+        }
+    }
+}
+
+/// The QP's constraints `Σ x·u[col] ≤ bound`, six per stance foot and
+/// step (the variables of `var_of`), given to `row` in order:
+/// `±f_x − μ f_z ≤ 0`, `±f_y − μ f_z ≤ 0`, `f_z ≤ f_max`, `−f_z ≤ −f_min`.
+fn constraint_rows(
+    var_of: &[[usize; MPC_FEET]],
+    steps: &[MpcStep],
+    (fmin, fmax): (f64, f64),
+    mut row: impl FnMut(&[(usize, f64)], f64),
+) {
+    for (vars, step) in var_of.iter().zip(steps) {
+        for (f, &v) in vars.iter().enumerate() {
+            if v == usize::MAX {
+                continue;
+            }
+            let mu = step.friction[f].max(0.0);
+            for (axis, sign) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)] {
+                row(&[(v + axis, sign), (v + 2, -mu)], 0.0);
+            }
+            row(&[(v + 2, 1.0)], fmax);
+            row(&[(v + 2, -1.0)], -fmin);
         }
     }
 }
