@@ -5,6 +5,7 @@
 pub mod active_set;
 pub mod admm;
 pub mod force_qp;
+pub mod ground_plane;
 pub mod joint_pd;
 pub mod mpc;
 pub mod prescribed;

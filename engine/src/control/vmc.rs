@@ -26,7 +26,8 @@
 //! - Height: `base_height_m` above the ground beneath the base; its rate is
 //!   the base's vertical velocity (exact on level ground).
 //! - Yaw: integrated from the commanded yaw rate, starting at the measured
-//!   yaw; the error is wrapped to (−π, π]. Roll and pitch targets are 0.
+//!   yaw; the error is wrapped to (−π, π]. Roll and pitch targets are 0
+//!   (Study A), or lie along sloped ground ([`Vmc::set_posture`]).
 
 use crate::spatial::{Force, roll_pitch_from_rot, yaw_from_rot};
 use glam::{DMat3, DVec3};
@@ -167,6 +168,9 @@ pub struct Vmc {
     target_xy_m: Option<glam::DVec2>,
     /// Yaw target (rad, unwrapped).
     target_yaw_rad: f64,
+    /// Roll and pitch targets (rad) and the target's vertical velocity
+    /// (m/s): a torso that follows sloped ground ([`Self::set_posture`]).
+    posture: Option<(f64, f64, f64)>,
 }
 
 impl Vmc {
@@ -177,7 +181,21 @@ impl Vmc {
             command,
             target_xy_m: None,
             target_yaw_rad: 0.0,
+            posture: None,
         }
+    }
+
+    /// Roll and pitch targets (rad, module doc's convention) and the rate
+    /// at which the height target rises (m/s), for a torso that lies along
+    /// sloped ground; until [`Self::clear_posture`], they replace Study A's
+    /// level torso and still height.
+    pub fn set_posture(&mut self, roll_rad: f64, pitch_rad: f64, rise_mps: f64) {
+        self.posture = Some((roll_rad, pitch_rad, rise_mps));
+    }
+
+    /// Back to Study A's level torso (roll and pitch targets 0).
+    pub fn clear_posture(&mut self) {
+        self.posture = None;
     }
 
     /// Forget the targets: the next update anchors them at the measured state.
@@ -234,18 +252,26 @@ impl Vmc {
         let f_h = glam::DVec2::new(g.stiffness_npm.x, g.stiffness_npm.y) * e_h
             + glam::DVec2::new(g.damping_nspm.x, g.damping_nspm.y) * (v_des_h - v_h);
         let f_xy = to_world(f_h);
-        let f_z = g.stiffness_npm.z * (p.base_height_m - input.height_above_ground_m)
-            - g.damping_nspm.z * input.base_linear_velocity_mps.z
-            + p.weight_n();
+        let f_z = match self.posture {
+            None => {
+                g.stiffness_npm.z * (p.base_height_m - input.height_above_ground_m)
+                    - g.damping_nspm.z * input.base_linear_velocity_mps.z
+            }
+            Some((_, _, rise)) => {
+                g.stiffness_npm.z * (p.base_height_m - input.height_above_ground_m)
+                    + g.damping_nspm.z * (rise - input.base_linear_velocity_mps.z)
+            }
+        } + p.weight_n();
 
         let w = input.base_angular_velocity_radps;
         let w_h = to_heading(w.truncate());
         let yaw_err = wrap_pi(yaw_target - yaw);
         let kr = g.stiffness_nm_per_rad;
         let br = g.damping_nms_per_rad;
+        let (roll_des, pitch_des) = self.posture.map_or((0.0, 0.0), |(r, p, _)| (r, p));
         let m_h = glam::DVec2::new(
-            kr.x * (0.0 - roll) + br.x * (0.0 - w_h.x),
-            kr.y * (0.0 - pitch) + br.y * (0.0 - w_h.y),
+            kr.x * (roll_des - roll) + br.x * (0.0 - w_h.x),
+            kr.y * (pitch_des - pitch) + br.y * (0.0 - w_h.y),
         );
         let m_xy = to_world(m_h);
         let m_z = kr.z * yaw_err + br.z * (cmd.yaw_rate_radps - w.z);
