@@ -155,6 +155,11 @@ pub struct LegState {
     /// in stance: where the foot touched down, if recorded by
     /// [`GaitScheduler::update_with_feet`].
     pub touchdown_pos_m: DVec3,
+    /// During a swing: how much the ground rises from under the lift-off
+    /// point to under the target and how far it pokes above the line
+    /// between them (m), when the caller knows the ground
+    /// ([`GaitScheduler::set_touchdown_target_over`]).
+    pub ground_rise_m: Option<(f64, f64)>,
 }
 
 impl LegState {
@@ -174,12 +179,16 @@ impl LegState {
     /// This swing's trajectory from [`Self::liftoff_pos_m`] to
     /// [`Self::touchdown_pos_m`] with the given lift height (m).
     pub fn swing_trajectory(&self, lift_height_m: f64) -> SwingTrajectory {
-        SwingTrajectory::new(
+        let t = SwingTrajectory::new(
             self.liftoff_pos_m,
             self.touchdown_pos_m,
             lift_height_m,
             self.swing_duration_s,
-        )
+        );
+        match self.ground_rise_m {
+            Some((rise, obstacle)) => t.over_ground(rise, obstacle),
+            None => t,
+        }
     }
 
     /// The swing foot's reference now: the trajectory at the current progress,
@@ -244,6 +253,7 @@ impl GaitScheduler {
             contact: true,
             liftoff_pos_m: DVec3::ZERO,
             touchdown_pos_m: DVec3::ZERO,
+            ground_rise_m: None,
         }; MAX_LEGS];
         for (i, leg) in legs.iter_mut().enumerate().take(gait.legs()) {
             leg.clock_phase = gait.leg_phase(i, phase);
@@ -393,6 +403,22 @@ impl GaitScheduler {
     pub fn set_touchdown_target(&mut self, leg: usize, target_m: DVec3) {
         assert!(leg < self.gait.legs(), "leg {leg} of {}", self.gait.legs());
         self.legs[leg].touchdown_pos_m = target_m;
+        self.legs[leg].ground_rise_m = None;
+    }
+
+    /// [`Self::set_touchdown_target`] over ground that rises by `rise_m`
+    /// (m) from under the leg's lift-off point to under `target_m`, poking
+    /// `obstacle_m` (m) above the line between them (for the swing's shape
+    /// over steps, [`SwingTrajectory::horizontal_window`]).
+    pub fn set_touchdown_target_over(
+        &mut self,
+        leg: usize,
+        target_m: DVec3,
+        rise_m: f64,
+        obstacle_m: f64,
+    ) {
+        self.set_touchdown_target(leg, target_m);
+        self.legs[leg].ground_rise_m = Some((rise_m, obstacle_m));
     }
 
     /// Switches to another gait with the same number of legs, keeping the gait

@@ -6,7 +6,9 @@
 //! velocity **and acceleration** are zero at both ends, so the references a
 //! controller tracks (and their feed-forward) start and end smoothly.
 //!
-//! - Horizontal (x, y): one step from lift-off to target over the whole swing.
+//! - Horizontal (x, y): one step from lift-off to target over the whole
+//!   swing; onto a step or a stair the foot first rises, and off one it first
+//!   moves over ([`SwingTrajectory::horizontal_window`]).
 //! - Vertical (z): a rise from the lift-off height to the apex over the first
 //!   half of the swing, then a fall to the target height over the second half.
 //!   Each half is monotone, so the apex (at progress ½) is the highest point,
@@ -64,6 +66,16 @@ pub struct SwingTrajectory {
     pub apex_z_m: f64,
     /// Swing duration (s); zero or negative gives positions with zero derivatives.
     pub duration_s: f64,
+    /// How much the ground rises from under the lift-off point to under the
+    /// target (m): `end_m.z − start_m.z` unless the caller knows the ground
+    /// ([`Self::over_ground`]); a foot that has sunk into soft ground lifts
+    /// off below the surface without there being a step.
+    pub ground_rise_m: f64,
+    /// How far the ground between the two pokes above the straight line
+    /// from the ground under the lift-off point to the ground under the
+    /// target (m): a step's edge does, a smooth wave hardly. Without
+    /// knowledge of the ground, `|ground_rise_m|` (as if it were a step).
+    pub ground_obstacle_m: f64,
 }
 
 impl SwingTrajectory {
@@ -80,6 +92,19 @@ impl SwingTrajectory {
             end_m,
             apex_z_m: start_m.z.max(end_m.z) + lift_height_m,
             duration_s,
+            ground_rise_m: end_m.z - start_m.z,
+            ground_obstacle_m: (end_m.z - start_m.z).abs(),
+        }
+    }
+
+    /// This swing over ground that rises by `rise_m` (m) from under its
+    /// lift-off point to under its target, with an obstacle `obstacle_m`
+    /// (m) above the line between them ([`Self::ground_obstacle_m`]).
+    pub fn over_ground(self, rise_m: f64, obstacle_m: f64) -> Self {
+        SwingTrajectory {
+            ground_rise_m: rise_m,
+            ground_obstacle_m: obstacle_m,
+            ..self
         }
     }
 
@@ -95,8 +120,16 @@ impl SwingTrajectory {
         } else {
             (0.0, 0.0)
         };
-        let (b, db, ddb) = min_jerk(s);
         let d = self.end_m - self.start_m;
+        let (h0, h1) = self.horizontal_window();
+        let (b, db, ddb) = if (h0, h1) == (0.0, 1.0) {
+            min_jerk(s)
+        } else {
+            // the horizontal step runs on (s − h0)/(h1 − h0)
+            let w = 1.0 / (h1 - h0);
+            let (b, db, ddb) = min_jerk((s - h0) * w);
+            (b, db * w, ddb * w * w)
+        };
         // Each vertical half runs on u = 2s (resp. 2s − 1): du/dt = 2/T.
         let (z0, z1, u) = if s < 0.5 {
             (self.start_m.z, self.apex_z_m, 2.0 * s)
@@ -117,6 +150,32 @@ impl SwingTrajectory {
                 d.y * ddb * inv_t2,
                 dz * ddbz * 4.0 * inv_t2,
             ),
+        }
+    }
+
+    /// Where in the swing (progress from, to) the horizontal step is made.
+    /// Over the whole swing, unless the ground between the ends pokes more
+    /// than half the lift height above the line between them (a step or a
+    /// stair's edge, not a smooth wave):
+    /// then, stepping up, the foot rises before it moves over (up to 30 %
+    /// of the swing, reached at a rise of one lift height) so that it
+    /// clears the riser it starts in front of; stepping down, it moves over
+    /// first, so that it clears the edge it leaves before it descends.
+    pub fn horizontal_window(&self) -> (f64, f64) {
+        const DELAY: f64 = 0.3;
+        let lift = self.apex_z_m - self.start_m.z.max(self.end_m.z);
+        if lift <= 0.0 {
+            return (0.0, 1.0);
+        }
+        let obstacle = self.ground_obstacle_m;
+        if obstacle <= 0.5 * lift {
+            return (0.0, 1.0);
+        }
+        let share = DELAY * ((obstacle / lift - 0.5) / 0.5).clamp(0.0, 1.0);
+        if self.ground_rise_m >= 0.0 {
+            (share, 1.0)
+        } else {
+            (0.0, 1.0 - share)
         }
     }
 
@@ -154,7 +213,9 @@ impl SwingTrajectory {
     /// Peak horizontal foot acceleration (m/s²): `10/√3 · |Δxy| / T²`.
     pub fn peak_horizontal_acceleration_m_s2(&self) -> f64 {
         let d = self.end_m - self.start_m;
-        MIN_JERK_PEAK_ACC * d.truncate().length() / (self.duration_s * self.duration_s)
+        let (h0, h1) = self.horizontal_window();
+        let t = (h1 - h0) * self.duration_s;
+        MIN_JERK_PEAK_ACC * d.truncate().length() / (t * t)
     }
 }
 
@@ -201,6 +262,107 @@ impl ReachDown {
             (self.max_depth_m, 0.0, 0.0)
         } else {
             (d, v, a)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Lowest height of the foot (its sphere's bottom) over the swing while
+    /// it is horizontally within a foot radius (3 cm) of an edge at `edge_x`.
+    fn lowest_near(t: &SwingTrajectory, edge_x: f64) -> f64 {
+        (0..=4000)
+            .map(|k| t.sample(k as f64 / 4000.0).pos_m)
+            .filter(|p| (p.x - edge_x).abs() <= 0.03)
+            .map(|p| p.z)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn a_foot_clears_the_riser_it_steps_up_and_the_edge_it_steps_down() {
+        // a 0.1 m step at x = 0.05, the foot lifting 5 cm in front of it
+        // for a 0.4 m step, lift height 5 cm
+        let up = SwingTrajectory::new(DVec3::ZERO, DVec3::new(0.4, 0.0, 0.1), 0.05, 0.23);
+        assert_eq!(up.horizontal_window(), (0.3, 1.0));
+        assert!(
+            lowest_near(&up, 0.05) > 0.1 + 0.02,
+            "over the riser at {:.3} m",
+            lowest_near(&up, 0.05)
+        );
+        // the same step made over the whole swing would hit the riser
+        let plain = SwingTrajectory {
+            apex_z_m: 0.15,
+            ..SwingTrajectory::new(DVec3::ZERO, DVec3::new(0.4, 0.0, 0.0), 0.15, 0.23)
+        };
+        assert!(lowest_near(&plain, 0.05) < 0.1);
+        // stepping down off an edge 5 cm before the target
+        let down = SwingTrajectory::new(
+            DVec3::new(0.0, 0.0, 0.1),
+            DVec3::new(0.4, 0.0, 0.0),
+            0.05,
+            0.23,
+        );
+        assert_eq!(down.horizontal_window(), (0.0, 0.7));
+        assert!(
+            lowest_near(&down, 0.35) > 0.1 + 0.02,
+            "{}",
+            lowest_near(&down, 0.35)
+        );
+        // ends and derivatives: at rest at both ends, the acceleration
+        // bounded by the compressed step's peak
+        for t in [up, down] {
+            let (a, b) = (t.sample(0.0), t.sample(1.0));
+            assert_eq!(a.pos_m, t.start_m);
+            assert!((b.pos_m - t.end_m).length() < 1e-15);
+            assert_eq!(a.vel_m_s, DVec3::ZERO);
+            assert!(b.vel_m_s.length() < 1e-12);
+            let peak = (0..=4000)
+                .map(|k| t.sample(k as f64 / 4000.0).acc_m_s2.x.abs())
+                .fold(0.0, f64::max);
+            assert!(peak <= t.peak_horizontal_acceleration_m_s2() * (1.0 + 1e-9));
+            assert!(peak > 0.99 * t.peak_horizontal_acceleration_m_s2());
+        }
+    }
+
+    #[test]
+    fn level_and_gently_sloped_swings_step_over_the_whole_swing() {
+        for dz in [0.0, 0.02, -0.025] {
+            let t = SwingTrajectory::new(DVec3::ZERO, DVec3::new(0.4, 0.1, dz), 0.05, 0.23);
+            assert_eq!(t.horizontal_window(), (0.0, 1.0));
+            // the same bits as the plain minimum-jerk step
+            for k in 0..=10 {
+                let s = k as f64 / 10.0;
+                let (b, _, _) = min_jerk(s);
+                assert_eq!(t.sample(s).pos_m.x, 0.4 * b);
+            }
+        }
+    }
+
+    #[test]
+    fn the_velocity_is_the_derivative_of_the_position_in_a_windowed_step() {
+        let t = SwingTrajectory::new(DVec3::ZERO, DVec3::new(0.4, 0.0, 0.035), 0.05, 0.25);
+        let (h0, _) = t.horizontal_window();
+        assert!(h0 > 0.0 && h0 < 0.3);
+        let eps = 1e-6;
+        // (off the apex, s = ½, where the vertical jerk jumps)
+        for k in 0..20 {
+            let s = (k as f64 + 0.5) / 20.0;
+            let fd =
+                (t.sample(s + eps).pos_m - t.sample(s - eps).pos_m) / (2.0 * eps * t.duration_s);
+            assert!(
+                (fd - t.sample(s).vel_m_s).length() < 1e-6,
+                "at {s}: {fd} vs {}",
+                t.sample(s).vel_m_s
+            );
+            let fa = (t.sample(s + eps).vel_m_s - t.sample(s - eps).vel_m_s)
+                / (2.0 * eps * t.duration_s);
+            assert!(
+                (fa - t.sample(s).acc_m_s2).length() < 1e-4,
+                "at {s}: {fa} vs {}",
+                t.sample(s).acc_m_s2
+            );
         }
     }
 }
