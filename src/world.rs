@@ -868,6 +868,14 @@ fn controller(
             if wp.whole_body {
                 wp.gait = Gait::long_swing_trot();
             }
+            // the torso follows the ground plane under the feet (on slopes
+            // and steps), unless asked not to; Study A's mapping keeps its
+            // level torso
+            wp.follow_ground_plane = c
+                .params
+                .get("follow_ground")
+                .and_then(|v| v.as_bool())
+                .unwrap_or(wp.whole_body);
             wp.planner = match c.params.get("planner").and_then(|v| v.as_str()) {
                 None | Some("vmc") => Planner::Vmc,
                 Some("mpc") if wp.whole_body => Planner::Mpc,

@@ -152,9 +152,11 @@ fn main() {
     }
     if std::env::var("WB").is_ok() {
         p.whole_body = true;
+        p.follow_ground_plane = std::env::var("NOPLANE").is_err();
     }
     if std::env::var("MPC").is_ok() {
         p.whole_body = true;
+        p.follow_ground_plane = std::env::var("NOPLANE").is_err();
         p.planner = quadsim_engine::control::walker::Planner::Mpc;
     }
     if let Some(x) = env("MPCF") {
@@ -245,6 +247,7 @@ fn main() {
         q0[0] += env("SEED").unwrap_or(1.0) * dx;
     }
     let mut walker = Walker::new(&desc, &model, p).unwrap();
+    let mut st_q_lift = 0.0;
     let concrete = GroundMaterial::preset("concrete").unwrap();
     let mut terrain = TerrainUnion::flat(0.0, concrete);
     if let Some(x0) = env("SINE") {
@@ -260,11 +263,63 @@ fn main() {
         );
     }
     if let Some(edge) = env("STEPUP") {
-        // a 5 cm platform from x = edge on
+        // a platform (STEPH m, default 5 cm) from x = edge on, 3 m long
+        let h = env("STEPH").unwrap_or(0.05);
+        let len = env("STEPLEN").unwrap_or(20.0);
         terrain = terrain.with(
             TerrainPatch::new(
-                TerrainShape::Flat(Flat::new(DVec2::new(20.0, 20.0)).unwrap()),
-                DVec3::new(edge + 10.0, 0.0, 0.05),
+                TerrainShape::Flat(Flat::new(DVec2::new(len, 20.0)).unwrap()),
+                DVec3::new(edge + len / 2.0, 0.0, h),
+                0.0,
+                concrete,
+            )
+            .unwrap(),
+        );
+    }
+    if let Some(edge) = env("BOXUP") {
+        // a 3 m long box platform (BOXH m, default 0.1) from x = edge: risers up and down
+        let h = env("BOXH").unwrap_or(0.1);
+        use quadsim_engine::terrain::{BoxObstacles, BoxSpec};
+        terrain = terrain.with(
+            TerrainPatch::new(
+                TerrainShape::Boxes(
+                    BoxObstacles::new(vec![BoxSpec {
+                        centre_m: DVec3::new(edge + 1.5, 0.0, h / 2.0),
+                        size_m: DVec3::new(3.0, 4.0, h),
+                        yaw_rad: 0.0,
+                    }])
+                    .unwrap(),
+                ),
+                DVec3::ZERO,
+                0.0,
+                concrete,
+            )
+            .unwrap(),
+        );
+    }
+    if let Some(deg) = env("SLOPE") {
+        // an incline of SLOPE degrees rising along +x from x = SLOPEX (default 1.5), 14 m long
+        // (downhill: from a 2 m high platform that the robot starts on)
+        let x0 = env("SLOPEX").unwrap_or(1.5);
+        let a = deg.to_radians();
+        let top = if deg < 0.0 { 2.0 } else { 0.0 };
+        if deg < 0.0 {
+            terrain = terrain.with(
+                TerrainPatch::new(
+                    TerrainShape::Flat(Flat::new(DVec2::new(20.0, 20.0)).unwrap()),
+                    DVec3::new(x0 - 10.0, 0.0, top),
+                    0.0,
+                    concrete,
+                )
+                .unwrap(),
+            );
+        }
+        terrain = terrain.with(
+            TerrainPatch::new(
+                TerrainShape::Incline(
+                    quadsim_engine::terrain::Incline::new(a, DVec2::new(14.0, 20.0)).unwrap(),
+                ),
+                DVec3::new(x0 + 7.0, 0.0, top + 7.0 * a.tan()),
                 0.0,
                 concrete,
             )
@@ -272,7 +327,11 @@ fn main() {
         );
     }
     let points = ContactPoint::feet(&model, &desc);
+    if env("SLOPE").is_some_and(|d| d < 0.0) {
+        st_q_lift = 2.0;
+    }
     let mut states = vec![ContactState::default(); points.len()];
+    q0[2] += st_q_lift;
     let mut st = State {
         q: q0,
         v: vec![0.0; model.nv],
@@ -290,6 +349,8 @@ fn main() {
     let mut x_prev = st.q[0];
     let mut tau_peak = vec![0.0_f64; model.nv - 6];
     let mut sat = 0usize;
+    // saturated controller ticks per joint, in swing and in stance
+    let mut sat_j = vec![(0usize, 0usize); model.nv - 6];
     // peak normal foot force after the first second (N) and when (s)
     let mut fpk = (0.0f64, 0.0f64, 0usize);
     let mut slip = 0usize;
@@ -373,6 +434,12 @@ fn main() {
                 tau_peak[j] = tau_peak[j].max(t.abs());
                 if t.abs() >= model.effort_limit[6 + j] - 1e-9 {
                     sat += 1;
+                    let nj = (model.nv - 6) / 4;
+                    if walker.scheduler().leg(j / nj).phase == LegPhase::Swing {
+                        sat_j[j].0 += 1;
+                    } else {
+                        sat_j[j].1 += 1;
+                    }
                 }
             }
             if !contacts.iter().any(|&c| c) {
@@ -502,6 +569,7 @@ fn main() {
             );
         }
     }
+    println!("saturated ticks per joint (swing, stance): {sat_j:?}");
     println!(
         "peak |tau| per joint (N·m): {:?}",
         tau_peak.iter().map(|t| t.round()).collect::<Vec<_>>()

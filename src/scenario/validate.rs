@@ -127,6 +127,7 @@ pub const CONTROLLER_KINDS: &[(&str, &[KeySpec])] = &[
             ("placement_gain_s", Domain::NonNegative, false),
             ("position_clip_m", Domain::Positive, false),
             ("whole_body", Domain::Bool, false),
+            ("follow_ground", Domain::Bool, false),
             ("planner", Domain::Text, false),
         ],
     ),

@@ -36,6 +36,7 @@
 //! legs are driven. Sign conventions: see [`super::force_qp`] (torques) and
 //! [`super::vmc`] (wrench).
 
+use super::ground_plane::GroundPlane;
 use crate::com::com_and_velocity;
 use crate::data::Data;
 use crate::description::RobotDescription;
@@ -176,6 +177,21 @@ pub struct WalkerParams {
     pub planner: Planner,
     /// Tuning of the [`Planner::Mpc`] planner.
     pub mpc: MpcParams,
+    /// Whether the torso follows the ground plane under the feet
+    /// ([`super::ground_plane`]): its height target is taken above that
+    /// plane, and its roll and pitch targets lie along it. `false`: Study
+    /// A's targets, height above the ground beneath the base and a level
+    /// torso. On level ground the two agree bit for bit.
+    pub follow_ground_plane: bool,
+    /// Time constant (s) of the first-order filter on that plane: a swing
+    /// foot's target crossing a step's edge moves the fit at once, and the
+    /// torso's height spring would throw the body up (0.1 s; 0: none).
+    pub ground_plane_filter_s: f64,
+    /// The whole-body layer's knee guard ([`Self::knee_guard_rad`] for the
+    /// `τ = Jᵀ f` mapping): a safety net against a knee snapping through
+    /// straight, smaller, since the layer itself keeps the legs bent on
+    /// open ground (0.2 rad; ≤ 0: none).
+    pub whole_body_knee_guard_rad: f64,
 }
 
 /// The body-force planner of a [`Walker`].
@@ -283,6 +299,9 @@ impl WalkerParams {
             planner: Planner::Vmc,
             mpc: MpcParams::default(),
             swing_max_acc_mps2: 0.0,
+            follow_ground_plane: false,
+            ground_plane_filter_s: 0.1,
+            whole_body_knee_guard_rad: 0.2,
         }
     }
 }
@@ -332,6 +351,14 @@ pub enum WalkerError {
         why: &'static str,
     },
 }
+
+/// A contact supports its foot only if the ground's normal there is within
+/// 60° of vertical ([`Walker::tick`], step 1).
+const SUPPORT_MIN_NORMAL_Z: f64 = 0.5;
+/// ... and the foot is at most this far (m) above its standing height over
+/// the ground the map has beneath it: a foot that meets a 10 cm riser
+/// halfway up has not landed.
+const SUPPORT_MAX_HEIGHT_M: f64 = 0.04;
 
 /// What the walker needs to read each tick besides the model and state.
 #[derive(Clone, Copy, Debug)]
@@ -437,6 +464,11 @@ pub struct Walker {
     /// Low-passed CoM velocity (heading frame) for foot placement.
     v_filt: DVec2,
     v_filt_init: bool,
+    /// The ground plane the torso follows this tick (level at the ground
+    /// beneath the base unless [`WalkerParams::follow_ground_plane`]).
+    ground: GroundPlane,
+    /// The filtered plane and the base's ground point it was taken about.
+    ground_filtered: Option<(GroundPlane, DVec2)>,
     /// The whole-body layer's workspace (when [`WalkerParams::whole_body`]).
     wbc: Option<Box<WholeBody>>,
     /// The MPC planner and its problem (when [`Planner::Mpc`]).
@@ -555,6 +587,8 @@ impl Walker {
             command_set: params.command,
             v_filt: DVec2::ZERO,
             v_filt_init: false,
+            ground: GroundPlane::level(0.0),
+            ground_filtered: None,
             wbc: params
                 .whole_body
                 .then(|| Box::new(WholeBody::new(model, params.wbc))),
@@ -620,8 +654,21 @@ impl Walker {
     /// targets on the far side (observed at 0.75 m/s: every joint saturated).
     /// A one-sided PD (the swing gains of that joint) toward the margin.
     fn guard_knee(&self, leg: usize, nv0: usize, q: &[f64], v: &[f64], tau_joints: &mut [f64]) {
-        let LegInfo { qi, vi, dof, .. } = self.leg_info[leg];
         let margin = self.params.knee_guard_rad;
+        self.guard_knee_at(leg, margin, nv0, q, v, tau_joints);
+    }
+
+    /// [`Self::guard_knee`] with the given margin (rad).
+    fn guard_knee_at(
+        &self,
+        leg: usize,
+        margin: f64,
+        nv0: usize,
+        q: &[f64],
+        v: &[f64],
+        tau_joints: &mut [f64],
+    ) {
+        let LegInfo { qi, vi, dof, .. } = self.leg_info[leg];
         if dof < 3 || margin <= 0.0 {
             return;
         }
@@ -749,6 +796,32 @@ impl Walker {
             let fp = crate::kinematics::frame_pose(model, data, li.frame);
             self.feet_world[i] = fp.transform_point(li.point);
         }
+        // Only contacts that can carry the foot count: not a foot against a
+        // riser or a wall (a contact normal far from vertical, or the foot
+        // well above the ground the map has beneath it). On open ground
+        // every contact counts.
+        let mut support = [false; MAX_FEET];
+        let filtered;
+        let input = if input.contacts.len() >= nl {
+            for (i, s) in support.iter_mut().enumerate().take(nl) {
+                let f = self.feet_world[i];
+                let upward = input
+                    .normals
+                    .get(i)
+                    .is_none_or(|n| n.z >= SUPPORT_MIN_NORMAL_Z);
+                let on_ground = input.terrain.height(f.x, f.y).is_none_or(|g| {
+                    f.z - g - self.leg_info[i].standing_height_m <= SUPPORT_MAX_HEIGHT_M
+                });
+                *s = input.contacts[i] && upward && on_ground;
+            }
+            filtered = WalkerInput {
+                contacts: &support[..nl],
+                ..*input
+            };
+            &filtered
+        } else {
+            input
+        };
         self.scheduler
             .update_with_feet(input.dt_s, input.contacts, &self.feet_world[..nl]);
         for i in 0..nl {
@@ -803,17 +876,73 @@ impl Walker {
                 .terrain
                 .height(hip_world.x + o.x, hip_world.y + o.y)
                 .unwrap_or(self.feet_world[i].z);
+            let ground_target = gz;
             let gz = gz + self.leg_info[i].standing_height_m;
             let target = foot_target_world(hip_world, yaw, gz, placement.offset_m);
-            self.scheduler.set_touchdown_target(i, target);
+            let lift = self.scheduler.leg(i).liftoff_pos_m;
+            match input.terrain.height(lift.x, lift.y) {
+                Some(ground_lift) => {
+                    // the ground along the step, against the line between its ends
+                    const SAMPLES: usize = 8;
+                    let mut obstacle = 0.0_f64;
+                    for k in 1..SAMPLES {
+                        let u = k as f64 / SAMPLES as f64;
+                        let p = lift.truncate().lerp(target.truncate(), u);
+                        if let Some(h) = input.terrain.height(p.x, p.y) {
+                            let chord = ground_lift + u * (ground_target - ground_lift);
+                            obstacle = obstacle.max(h - chord);
+                        }
+                    }
+                    self.scheduler.set_touchdown_target_over(
+                        i,
+                        target,
+                        ground_target - ground_lift,
+                        obstacle,
+                    )
+                }
+                None => self.scheduler.set_touchdown_target(i, target),
+            }
         }
 
         // 3. per leg: joint targets (swing: IK of the reference, with joint
         //    velocity and acceleration; stance: the hold at the target height)
         let ground_z = input.terrain.height(p_base.x, p_base.y).unwrap_or(0.0);
+        self.ground = GroundPlane::level(ground_z);
+        if self.params.follow_ground_plane
+            && let Some(g) = self.fit_ground_plane(
+                input,
+                p_base.truncate(),
+                (heading.x_axis.y, heading.x_axis.x),
+            )
+        {
+            let tf = self.params.ground_plane_filter_s;
+            let here = p_base.truncate();
+            self.ground = match self.ground_filtered {
+                Some((f, at)) if tf > 0.0 => {
+                    // the filtered plane carried to the base's new ground
+                    // point, then moved toward the new fit
+                    let d = heading.transpose() * (here - at).extend(0.0);
+                    let carried = f.height_m + f.slope.dot(d.truncate());
+                    let a = (input.dt_s / tf).min(1.0);
+                    GroundPlane {
+                        height_m: carried + a * (g.height_m - carried),
+                        slope: f.slope + a * (g.slope - f.slope),
+                    }
+                }
+                _ => g,
+            };
+            self.ground_filtered = Some((self.ground, here));
+        }
+        let ground_z = self.ground.height_m;
         let target_height = self.vmc.params.base_height_m;
+        let planned_rot = if self.ground.slope == DVec2::ZERO {
+            heading
+        } else {
+            let (roll, pitch) = self.ground.roll_pitch_rad();
+            heading * DMat3::from_rotation_y(pitch) * DMat3::from_rotation_x(roll)
+        };
         let planned_base = crate::spatial::Transform::new(
-            heading,
+            planned_rot,
             DVec3::new(p_base.x, p_base.y, ground_z + target_height),
         );
         self.acc.fill(0.0);
@@ -953,6 +1082,14 @@ impl Walker {
         // (the heading frame's entries are `yaw.sin_cos()`: the same bits
         // VMC would compute)
         let heading_sin_cos = (heading.x_axis.y, heading.x_axis.x);
+        if self.ground.slope == DVec2::ZERO {
+            self.vmc.clear_posture();
+        } else {
+            let (roll, pitch) = self.ground.roll_pitch_rad();
+            let v_des = DVec2::new(self.vmc.command.forward_mps, self.vmc.command.lateral_mps);
+            self.vmc
+                .set_posture(roll, pitch, self.ground.rise_rate_mps(v_des));
+        }
         let mut w = self.vmc.update_at_heading(
             &VmcInput {
                 base_position_m: p_base,
@@ -1025,6 +1162,17 @@ impl Walker {
                 &second,
                 tau_joints,
             );
+            // the whole-body layer tracks the feet, not the knees: a leg
+            // stretched at the end of its stance (or lifting off) can snap
+            // through the straight knee into the other branch, and then
+            // walks on it. The guard keeps every knee on its branch.
+            for i in 0..nl {
+                let margin = self.params.whole_body_knee_guard_rad;
+                self.guard_knee_at(i, margin, nv0, q, v, tau_joints);
+            }
+            for (t, lim) in tau_joints.iter_mut().zip(&model.effort_limit[nv0..]) {
+                *t = t.clamp(-lim, *lim);
+            }
             return;
         }
 
@@ -1108,7 +1256,16 @@ impl Walker {
             let heading = DMat3::from_rotation_z(yaw);
             let v_des = heading * DVec3::new(cmd.forward_mps, cmd.lateral_mps, 0.0);
             let base = data.pose[0];
-            let ground_z = input.terrain.height(com.x, com.y).unwrap_or(0.0);
+            // the ground under the CoM: on the plane the torso follows
+            let ground_z = if self.ground.slope == DVec2::ZERO {
+                input.terrain.height(com.x, com.y).unwrap_or(0.0)
+            } else {
+                let d = heading.transpose() * (com - base.trans);
+                self.ground.height_m + self.ground.slope.dot(d.truncate())
+            };
+            let (roll_ref, pitch_ref) = self.ground.roll_pitch_rad();
+            let v_des_h = DVec2::new(cmd.forward_mps, cmd.lateral_mps);
+            let rise = self.ground.rise_rate_mps(v_des_h);
             // the CoM's height target: the base's, less the CoM's offset below it
             let z_ref = ground_z + self.vmc.params.base_height_m - (base.trans.z - com.z);
             let (mass, _, inertia_world) = composite_inertia_about_com(model, data);
@@ -1129,10 +1286,15 @@ impl Walker {
                 let p = com + v_des * t;
                 let r = &mut pb.reference[k];
                 *r = [0.0; NX];
+                if rise != 0.0 || roll_ref != 0.0 || pitch_ref != 0.0 {
+                    r[0] = roll_ref;
+                    r[1] = pitch_ref;
+                    r[11] = rise;
+                }
                 r[2] = yaw + cmd.yaw_rate_radps * t;
                 r[3] = p.x;
                 r[4] = p.y;
-                r[5] = z_ref;
+                r[5] = z_ref + rise * t;
                 r[8] = cmd.yaw_rate_radps;
                 r[9] = v_des.x;
                 r[10] = v_des.y;
@@ -1193,6 +1355,30 @@ impl Walker {
         }
         self.wrench = w;
         self.mpc = Some(plan);
+    }
+
+    /// The ground plane under the feet ([`super::ground_plane`]): through
+    /// the terrain's heights where the stance feet stand and where the
+    /// swing feet will touch down, about the base's ground point `origin`.
+    fn fit_ground_plane(
+        &self,
+        input: &WalkerInput<'_>,
+        origin: DVec2,
+        heading_sin_cos: (f64, f64),
+    ) -> Option<GroundPlane> {
+        let nl = self.legs.len();
+        let mut pts = [DVec3::ZERO; MAX_FEET];
+        for (i, p) in pts.iter_mut().enumerate().take(nl) {
+            let leg = self.scheduler.leg(i);
+            let xy = if leg.phase == LegPhase::Swing {
+                leg.touchdown_pos_m.truncate()
+            } else {
+                self.feet_world[i].truncate()
+            };
+            let z = input.terrain.height(xy.x, xy.y)?;
+            *p = xy.extend(z);
+        }
+        GroundPlane::fit(&pts[..nl], origin, heading_sin_cos)
     }
 
     /// The friction the force plan may use at foot `i` (the ground's μ under
