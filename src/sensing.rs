@@ -39,22 +39,24 @@ fn check(
     }
 }
 
-/// The sensor configuration of robot `r` (key path `p`), or `None` for
-/// `preset = "none"`.
+/// The sensor configuration of robot `r` (key path `p`, total mass
+/// `total_mass_kg`: a robot that is not built in gets foot sensors sized to
+/// it, [`SensorConfig::defaults_for_robot`]), or `None` for `preset = "none"`.
 pub fn sensor_config(
     loc: &Locator<'_>,
     p: &str,
     r: &RobotSpec,
     controller_rate_hz: f64,
+    total_mass_kg: f64,
 ) -> Result<Option<SensorConfig>, ScenarioError> {
     let s = &r.sensors;
     let sp = format!("{p}.sensors");
     check(loc, &format!("{sp}.rate_hz"), s.rate_hz, true)?;
     let rate = s.rate_hz.unwrap_or(controller_rate_hz);
     let mut cfg = match s.preset.as_deref().unwrap_or("default") {
-        "default" => SensorConfig::defaults_for(&r.model, rate),
+        "default" => SensorConfig::defaults_for_robot(&r.model, total_mass_kg, rate),
         "ideal" => {
-            let d = SensorConfig::defaults_for(&r.model, rate);
+            let d = SensorConfig::defaults_for_robot(&r.model, total_mass_kg, rate);
             SensorConfig {
                 imu: d
                     .imu
@@ -331,7 +333,7 @@ pub fn robot_sensing(
         }
     };
     let params = estimator_params(loc, p, r)?;
-    let Some(cfg) = sensor_config(loc, p, r, controller_rate_hz)? else {
+    let Some(cfg) = sensor_config(loc, p, r, controller_rate_hz, model.total_mass)? else {
         if source == Some(StateSource::Estimated) {
             return Err(loc.at(
                 &source_path,

@@ -668,7 +668,7 @@ impl Prepared {
             .expect("the robot");
         let rate = self.scenario.file.world.controller_rate_hz;
         let p = self.scenario.file.robot_key_path(self.robot_index);
-        let Some(cfg) = crate::sensing::sensor_config(loc, &p, spec_r, rate)
+        let Some(cfg) = crate::sensing::sensor_config(loc, &p, spec_r, rate, self.nominal_mass_kg)
             .map_err(|e| e.message_with_path())?
         else {
             return Ok(()); // no sensors

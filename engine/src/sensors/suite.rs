@@ -24,6 +24,10 @@ pub struct SensorConfig {
 /// Standard gravity (m/s²), to write accelerometer figures given in g.
 const G: f64 = 9.806_65;
 
+/// quad16's mass (kg): the reference of [`SensorConfig::defaults_for_robot`]'s
+/// scaling of the foot sensors.
+const QUAD16_MASS_KG: f64 = 28.0;
+
 impl SensorConfig {
     /// The default sensors of a built-in model (`"quad16"`, `"quad12"`;
     /// anything else gets quad16's), every sensor at `rate_hz` (the
@@ -109,6 +113,29 @@ impl SensorConfig {
             contacts: Some(contacts),
             mocap: None,
         }
+    }
+
+    /// The default sensors of a robot of `total_mass_kg` called `model`: a
+    /// built-in robot's ([`Self::defaults_for`], unchanged); any other robot
+    /// gets quad16's set with its foot force sensors sized to the robot:
+    /// thresholds and noise times `total_mass_kg / 28` (quad16's 28 kg).
+    /// quad16's 20 N threshold is 29 % of its standing load per foot; an
+    /// 8.9 kg robot stands on 22 N per foot, so at 20 N its feet flicker in
+    /// and out of contact while standing and read as off the ground in
+    /// two-foot support's unloading (its trot fell within 0.21 s on the
+    /// sensed state; docs/walking.md, "Any quadruped").
+    pub fn defaults_for_robot(model: &str, total_mass_kg: f64, rate_hz: f64) -> SensorConfig {
+        let mut cfg = Self::defaults_for(model, rate_hz);
+        let builtin = crate::robots::builtin_names().contains(&model);
+        if !builtin && total_mass_kg.is_finite() && total_mass_kg > 0.0 {
+            let r = total_mass_kg / QUAD16_MASS_KG;
+            if let Some(c) = cfg.contacts.as_mut() {
+                c.on_threshold_n *= r;
+                c.off_threshold_n *= r;
+                c.noise.white_std *= r;
+            }
+        }
+        cfg
     }
 
     /// Mocap's defaults when switched on: 120 Hz, 10 ms latency, 0.5 mm and
