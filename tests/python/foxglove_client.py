@@ -161,6 +161,9 @@ async def run(args):
                 scene = json.loads(payload)
         entities = [e["id"] for e in scene["entities"]]
         assert f"{args.robot}/{args.torso}" in entities, entities[:5]
+        second = None
+        if args.then_robot:
+            second = await follow(ws, channels, args)
         print(
             json.dumps(
                 {
@@ -169,9 +172,49 @@ async def run(args):
                     "received": received,
                     "counts": counts,
                     "tf": tf,
+                    "second": second,
                 }
             )
         )
+
+
+async def follow(ws, channels, args):
+    """Stays connected while the first robot's world ends and another
+    world, with robot `--then-robot`, begins: the first robot's channels
+    must be unadvertised and the new robot's advertised, and its poses
+    must arrive on the same connection."""
+    first = {i for i, c in channels.items() if c["topic"].startswith(f"/{args.robot}/")}
+    gone, topic, sub_id, received = set(), f"/{args.then_robot}/base_pose", 1000, 0
+    target = None
+    while received < 10:
+        msg = await ws.recv()
+        if isinstance(msg, str):
+            m = json.loads(msg)
+            if m["op"] == "unadvertise":
+                gone.update(m["channelIds"])
+            elif m["op"] == "advertise":
+                for c in m["channels"]:
+                    channels[c["id"]] = c
+                    if c["topic"] == topic and target is None:
+                        target = c["id"]
+                        await ws.send(
+                            json.dumps(
+                                {
+                                    "op": "subscribe",
+                                    "subscriptions": [{"id": sub_id, "channelId": target}],
+                                }
+                            )
+                        )
+            STATE["second"] = {"gone": len(gone), "target": target, "received": received}
+            continue
+        sub = struct.unpack_from("<I", msg, 1)[0]
+        if sub == sub_id:
+            received += 1
+    return {
+        "robot": args.then_robot,
+        "received": received,
+        "first_channels_unadvertised": first <= gone,
+    }
 
 
 def main():
@@ -181,6 +224,7 @@ def main():
     p.add_argument("--torso", default="torso")
     p.add_argument("--messages", type=int, default=100)
     p.add_argument("--timeout", type=float, default=60.0)
+    p.add_argument("--then-robot", default=None)
     args = p.parse_args()
     try:
         asyncio.run(asyncio.wait_for(run(args), args.timeout))
