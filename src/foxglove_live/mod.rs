@@ -575,15 +575,28 @@ pub fn serve(server: &Server, opts: &BridgeOptions, stop: &AtomicBool) -> Result
                     last_dead_check = Instant::now();
                 }
                 if frames.ended() {
-                    // the last messages (the metrics), then the world's
-                    // channels go, and its services are let go (dropping
-                    // the readers) so that nothing of it is held
+                    // the last messages (the metrics); the scene first: the
+                    // frames were drained before the quiet, so any queued
+                    // now are a next run's, which its scene precedes
+                    let mut began = false;
+                    while let Some(m) = scene.try_next().map_err(err)? {
+                        began |= live.on_scene(m);
+                    }
                     while let Some(f) = frames.try_next().map_err(err)? {
                         live.on_frames(&f);
                     }
-                    while let Some(m) = scene.try_next().map_err(err)? {
-                        let _ = live.on_scene(m);
+                    if began || !frames.ended() {
+                        // the next run of this name took the services over
+                        // meanwhile (its scene may come next): serve it, its
+                        // channels already advertised stay
+                        if began {
+                            eprintln!("foxglove: a new run of world '{world}'");
+                        }
+                        last = Instant::now();
+                        continue;
                     }
+                    // the world's channels go, and its services are let go
+                    // (dropping the readers) so that nothing of it is held
                     live.end_world();
                     break;
                 }

@@ -182,10 +182,24 @@ async def follow(ws, channels, args):
     """Stays connected while the first robot's world ends and another
     world, with robot `--then-robot`, begins: the first robot's channels
     must be unadvertised and the new robot's advertised, and its poses
-    must arrive on the same connection."""
+    must arrive on the same connection.
+
+    The `foxglove` crate (0.30) sends a channel's advertisement before it
+    registers the channel for the client, so a subscription that answers
+    at once can meet "Unknown channel ID" (a status message); the client
+    subscribes again then, to the same channel (a few times at most), and
+    reports how often."""
     first = {i for i, c in channels.items() if c["topic"].startswith(f"/{args.robot}/")}
     gone, topic, sub_id, received = set(), f"/{args.then_robot}/base_pose", 1000, 0
-    target = None
+    target, resubscribed = None, 0
+
+    async def subscribe():
+        await ws.send(
+            json.dumps(
+                {"op": "subscribe", "subscriptions": [{"id": sub_id, "channelId": target}]}
+            )
+        )
+
     while received < 10:
         msg = await ws.recv()
         if isinstance(msg, str):
@@ -197,15 +211,23 @@ async def follow(ws, channels, args):
                     channels[c["id"]] = c
                     if c["topic"] == topic and target is None:
                         target = c["id"]
-                        await ws.send(
-                            json.dumps(
-                                {
-                                    "op": "subscribe",
-                                    "subscriptions": [{"id": sub_id, "channelId": target}],
-                                }
-                            )
-                        )
-            STATE["second"] = {"gone": len(gone), "target": target, "received": received}
+                        await subscribe()
+            elif (
+                m["op"] == "status"
+                and target is not None
+                and target not in gone
+                and m.get("message") == f"Unknown channel ID: {target}"
+                and resubscribed < 5
+            ):
+                resubscribed += 1
+                await asyncio.sleep(0.05)
+                await subscribe()
+            STATE["second"] = {
+                "gone": len(gone),
+                "target": target,
+                "received": received,
+                "resubscribed": resubscribed,
+            }
             continue
         sub = struct.unpack_from("<I", msg, 1)[0]
         if sub == sub_id:
@@ -214,6 +236,7 @@ async def follow(ws, channels, args):
         "robot": args.then_robot,
         "received": received,
         "first_channels_unadvertised": first <= gone,
+        "resubscribed": resubscribed,
     }
 
 
