@@ -13,7 +13,7 @@
 //! Durability: each chunk is written whole, once complete, in one write
 //! followed by a provisional end (a DataEnd record, a Footer without a
 //! summary, the magic) that the next chunk, or the real end, overwrites
-//! ([`LogFile`]). So after every chunk the file on disk is a complete MCAP
+//! (`LogFile`). So after every chunk the file on disk is a complete MCAP
 //! file: a killed process leaves a log that any reader reads, in streaming
 //! or seeking mode, up to its last chunk (see [`super::read`]; issue 29,
 //! item 7). A finished log's bytes are the same as with chunks written in
