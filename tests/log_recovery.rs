@@ -265,6 +265,21 @@ fn a_killed_run_leaves_a_readable_prefix() {
         let v = m.json().unwrap();
         assert!(v["pose"]["position"]["z"].as_f64().unwrap() > 0.3);
     }
+    // `export` exports it, and says the run was killed
+    let o = quadsim()
+        .arg("export")
+        .arg(&log_path)
+        .arg("--csv")
+        .arg(dir.join("csv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("no 'run' record (the run was killed)"),
+        "{err}"
+    );
+    assert!(dir.join("csv").read_dir().unwrap().count() > 0);
     // `report` recovers what was written (issue 29, item 7): a summary up
     // to the last message recovered, marked truncated, and the plots, and
     // says so in report.md
