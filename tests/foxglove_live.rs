@@ -251,6 +251,88 @@ fn foxglove_python_client_sees_the_logs_torso_live() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// One bridge outlives its world: a Foxglove client stays connected while
+/// a run with robot `rex` ends and another world, whose robot is `max`,
+/// starts under the same world name; `rex`'s channels are unadvertised,
+/// `max`'s advertised, and `max`'s poses arrive, with no restart.
+#[test]
+#[ignore = "needs python3 with `pip install websockets` (CI runs it with --ignored)"]
+fn foxglove_bridge_follows_robots_and_worlds_without_a_restart() {
+    let _alone = ALONE.lock().unwrap_or_else(|e| e.into_inner());
+    let world = world_name("fox2");
+    let mut bridge = quadsim();
+    bridge.args(["monitor", "--foxglove", "--port", "0", "--world", &world]);
+    let mut bridge = Proc::spawn(bridge, "foxglove: ws://");
+    let url = bridge
+        .wait_line(Duration::from_secs(30))
+        .unwrap_or_else(|| panic!("no server: {}", bridge.finish(Duration::ZERO).1));
+    let port = url
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|s| s.split(|c: char| !c.is_ascii_digit()).next())
+        .unwrap()
+        .to_string();
+    let second = tmp("fox2-scenario").join("max.toml");
+    let src = std::fs::read_to_string(root().join("scenarios/trot_flat.toml")).unwrap();
+    assert!(src.contains("name = \"rex\""), "trot_flat's robot is rex");
+    std::fs::write(&second, src.replace("name = \"rex\"", "name = \"max\"")).unwrap();
+    let run_of = |scenario: &Path, out: &Path| {
+        let mut run = quadsim();
+        run.arg("run")
+            .arg(scenario)
+            .args([
+                "--duration",
+                "2",
+                "--real-time",
+                "1",
+                "--no-report",
+                "--no-log",
+            ])
+            .args(["--world-name", &world])
+            .arg("--out")
+            .arg(out);
+        run
+    };
+    let (out1, out2) = (tmp("fox2-rex"), tmp("fox2-max"));
+    let mut run1 = Proc::spawn(
+        run_of(&root().join("scenarios/trot_flat.toml"), &out1),
+        "monitor: world",
+    );
+    assert!(
+        run1.wait_line(Duration::from_secs(60)).is_some(),
+        "run 1 never started"
+    );
+    let client = Command::new("python3")
+        .arg(root().join("tests/python/foxglove_client.py"))
+        .args(["--port", &port, "--robot", "rex", "--messages", "30"])
+        .args(["--then-robot", "max", "--timeout", "90"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("python3");
+    let (s1, e1) = run1.finish(Duration::from_secs(120));
+    assert!(s1.is_some_and(|s| s.success()), "run 1: {e1}");
+    let mut run2 = Proc::spawn(run_of(&second, &out2), "monitor: world");
+    let client = client.wait_with_output().expect("client");
+    let (s2, e2) = run2.finish(Duration::from_secs(120));
+    let _ = bridge.finish(Duration::ZERO);
+    let client_err = String::from_utf8_lossy(&client.stderr);
+    assert!(
+        client.status.success(),
+        "client failed: {client_err}\nrun 2: {e2}"
+    );
+    assert!(s2.is_some_and(|s| s.success()), "run 2: {e2}");
+    let got: Value = serde_json::from_slice(&client.stdout).unwrap();
+    let second_robot = &got["second"];
+    assert_eq!(second_robot["robot"], "max", "{got}");
+    assert!(second_robot["received"].as_u64().unwrap() >= 10, "{got}");
+    assert_eq!(second_robot["first_channels_unadvertised"], true, "{got}");
+    for d in [out1, out2] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+    let _ = std::fs::remove_dir_all(second.parent().unwrap());
+}
+
 /// `--real-time 1` on a 2 s run takes 2 s of wall-clock time (± 10 %, the
 /// process from start to exit) and writes the same log and summary
 /// (timing aside) as the unpaced run.

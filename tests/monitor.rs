@@ -296,6 +296,98 @@ fn two_worlds_at_once_do_not_collide() {
     let _ = std::fs::remove_dir_all(&ob);
 }
 
+/// Stops a run (SIGTERM) and gives its stderr.
+fn stop_stderr(child: Child) -> String {
+    let ok = Command::new("kill")
+        .arg("-TERM")
+        .arg(child.id().to_string())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "kill -TERM");
+    String::from_utf8_lossy(&child.wait_with_output().unwrap().stderr).into_owned()
+}
+
+/// A reader that stays attached while its world ends keeps the world's
+/// services alive; the next run under that name opens them and publishes
+/// to it (issue 30: it failed with "cannot create the header service:
+/// AlreadyExists" and ran unmonitored). A run whose name is taken by a
+/// world still running gets a clear warning instead.
+#[test]
+fn a_reader_held_across_two_worlds_of_one_name_sees_the_second() {
+    let (oa, ob, oc) = (tmp("held-a"), tmp("held-b"), tmp("held-c"));
+    let world = world_name("held");
+    let args = ["--world-name", world.as_str(), "--no-log"];
+    let mut ca = spawn_run("trot.toml", &oa, 1000.0, &args);
+    let mut reader = open(&world, &mut ca);
+    let ha = reader.wait_header(WAIT).unwrap();
+    let fa = receive(&mut reader, 5);
+    assert!(fa.iter().all(|i| i[0].gait_phase[0].is_finite()));
+    let ea = stop_stderr(ca);
+    let start = Instant::now();
+    while !reader.ended() {
+        assert!(start.elapsed() < WAIT, "the world did not end");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    while reader.try_next().unwrap().is_some() {}
+    // the reader still holds the services: the world is listed
+    assert!(quadsim::monitor::list_worlds().unwrap().contains(&world));
+    // a standing robot (joint PD: no gait phase) under the same name
+    let mut cb = spawn_run("stand.toml", &ob, 1000.0, &args);
+    let pid_b = cb.id();
+    let start = Instant::now();
+    let hb = loop {
+        let h = reader.header().unwrap().cloned();
+        if let Some(h) = h.filter(|h| h["pid"] != ha["pid"]) {
+            break h;
+        }
+        if start.elapsed() >= WAIT || cb.try_wait().unwrap().is_some() {
+            let _ = cb.kill();
+            let e = cb.wait_with_output().unwrap().stderr;
+            panic!(
+                "no header from the second world: {}",
+                String::from_utf8_lossy(&e)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let fb = receive(&mut reader, 5);
+    // a third run under the name while the second runs: a clear warning,
+    // and it runs on unmonitored
+    let cc = quadsim()
+        .arg("run")
+        .arg(scenario("stand.toml"))
+        .args([
+            "--out",
+            oc.to_str().unwrap(),
+            "--duration",
+            "0.05",
+            "--no-report",
+        ])
+        .args(args)
+        .output()
+        .unwrap();
+    let ec = String::from_utf8_lossy(&cc.stderr);
+    let eb = stop_stderr(cb);
+    assert_eq!(hb["world"], world.as_str());
+    assert_eq!(hb["pid"], pid_b);
+    assert!(
+        fb.iter()
+            .all(|i| i[0].gait_phase.iter().all(|p| p.is_nan())),
+        "the second world's frames are the standing robot's"
+    );
+    for e in [&ea, &eb] {
+        assert!(!e.contains("without live monitoring"), "{e}");
+    }
+    assert!(cc.status.success(), "{ec}");
+    assert!(
+        ec.contains("another running quadsim") && ec.contains("without live monitoring"),
+        "{ec}"
+    );
+    for d in [oa, ob, oc] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
 #[test]
 fn monitor_cli_prints_frames_and_times_out_on_a_missing_world() {
     let out = tmp("cli");

@@ -19,9 +19,27 @@
 //! `b_t = b_g` that is 2.9 on concrete at dt = 0.5 ms and quad16 creeps and
 //! chatters while standing; with `b_g / 4` it is 0.7 (regression test
 //! `quad16_stands_on_every_preset` in `tests/stand.rs`).
+//!
+//! **Hunt–Crossley grounds** (`f = k δⁿ + b δⁿ δ̇`) state `k` in N/mⁿ and `b`
+//! in N·s/mⁿ⁺¹, so their numbers cannot serve as the tangential gains (N/m,
+//! N·s/m). Copied, a ground of k 2e6, b 9e5 gave `b_t` = 2.25e5 N·s/m: a
+//! foot moving at 0.1 mm/s met more than its friction limit, slipped, and a
+//! body on a 20° incline with μ 0.5 crept 32 mm in 2 s (issue 29, item 6).
+//! Their default tangential gains are the linear equivalents at the static
+//! depth `δ_ref = (W/k)^(1/n)` under a nominal contact load
+//! `W` = [`NOMINAL_CONTACT_LOAD_N`], by the presets' rule: `k_t` the law's
+//! tangent stiffness `n k δ_refⁿ⁻¹` and `b_t` a quarter of its damping
+//! coefficient `b δ_refⁿ` ([`GroundMaterial::default_tangential`]; about
+//! 9.8e4 N/m and 7.9 N·s/m for that ground). A scenario sets them itself with
+//! `tangential_stiffness_n_per_m` and `tangential_damping_ns_per_m`.
 
 use crate::contact::error::ContactError;
 use crate::contact::law::NormalLaw;
+
+/// The contact load (N) at which a Hunt–Crossley ground's default
+/// tangential gains are taken: quad16's weight (28 kg) shared by its four
+/// feet, about 69 N.
+pub const NOMINAL_CONTACT_LOAD_N: f64 = 70.0;
 
 /// One of study A's ground types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -148,7 +166,10 @@ impl GroundMaterial {
     }
 
     /// This material with another normal law and normal gains (their units
-    /// follow the law, see [`NormalLaw`]); the tangential gains are kept.
+    /// follow the law, see [`NormalLaw`]). The tangential gains are kept for
+    /// the linear and hybrid laws (N/m and N·s/m like theirs); a
+    /// Hunt–Crossley law gets [`Self::default_tangential`]'s, its own gains
+    /// being in other units.
     pub fn with_law(
         mut self,
         law: NormalLaw,
@@ -159,7 +180,30 @@ impl GroundMaterial {
         self.stiffness = k;
         self.damping = b;
         self.preset = None;
+        if let NormalLaw::HuntCrossley { .. } = law {
+            // checked here: the gains below need k > 0
+            check("stiffness", k, true)?;
+            check("damping", b, false)?;
+            (self.tangential_stiffness_npm, self.tangential_damping_nspm) =
+                Self::default_tangential(law, k, b);
+        }
         self.validated()
+    }
+
+    /// Default tangential gains (`k_t` N/m, `b_t` N·s/m) of a ground with
+    /// normal `law`, `k` and `b`. Linear and hybrid laws: `k_t = k`,
+    /// `b_t = b / 4` (the presets' rule, see the module doc). Hunt–Crossley:
+    /// the law's tangent stiffness and a quarter of its damping coefficient
+    /// at the static depth `δ_ref` under [`NOMINAL_CONTACT_LOAD_N`]:
+    /// `k_t = n k δ_refⁿ⁻¹`, `b_t = b δ_refⁿ / 4`.
+    pub fn default_tangential(law: NormalLaw, k: f64, b: f64) -> (f64, f64) {
+        match law {
+            NormalLaw::Linear | NormalLaw::Hybrid { .. } => (k, b / 4.0),
+            NormalLaw::HuntCrossley { exponent } => {
+                let depth = law.static_depth(k, NOMINAL_CONTACT_LOAD_N);
+                (law.stiffness_at(k, depth), b * depth.powf(exponent) / 4.0)
+            }
+        }
     }
 
     /// This material with other tangential gains (N/m, N·s/m).
@@ -207,6 +251,58 @@ impl GroundMaterial {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Hunt–Crossley grounds get tangential gains in N/m and N·s/m: the
+    /// linear equivalents at the static depth under the nominal load (the
+    /// tangential spring then carries that load's shear as stiffly as the
+    /// normal spring carries the load); linear and hybrid grounds keep theirs.
+    #[test]
+    fn hunt_crossley_tangential_gains_are_in_their_own_units() {
+        let (k, b, n) = (2e6, 9e5, 1.5);
+        let law = NormalLaw::HuntCrossley { exponent: n };
+        let m = GroundMaterial::custom(k, b, 0.5)
+            .unwrap()
+            .with_law(law, k, b)
+            .unwrap();
+        let depth = (NOMINAL_CONTACT_LOAD_N / k).powf(1.0 / n);
+        let k_t = n * k * depth.powf(n - 1.0);
+        assert!((m.tangential_stiffness_npm - k_t).abs() < 1e-9 * k_t);
+        assert!((m.tangential_damping_nspm - b * depth.powf(n) / 4.0).abs() < 1e-9);
+        // about 9.8e4 N/m (concrete's is 1e5) and 7.9 N·s/m, not 2e6 and 2.25e5
+        assert!(
+            (9.5e4..1.0e5).contains(&m.tangential_stiffness_npm),
+            "{m:?}"
+        );
+        assert!((7.5..8.5).contains(&m.tangential_damping_nspm), "{m:?}");
+        // linear and hybrid: unchanged (k, b / 4)
+        let c = GroundMaterial::default();
+        assert_eq!(
+            (c.tangential_stiffness_npm, c.tangential_damping_nspm),
+            (1e5, 250.0)
+        );
+        let h = c
+            .with_law(
+                NormalLaw::Hybrid {
+                    depth0_m: 1e-3,
+                    stiffening: 1.0,
+                },
+                5e4,
+                100.0,
+            )
+            .unwrap();
+        assert_eq!(
+            (h.tangential_stiffness_npm, h.tangential_damping_nspm),
+            (1e5, 250.0)
+        );
+        // a bad Hunt–Crossley stiffness is an error, not NaN gains
+        assert!(matches!(
+            c.with_law(law, 0.0, b),
+            Err(ContactError::InvalidValue {
+                field: "stiffness",
+                ..
+            })
+        ));
+    }
 
     #[test]
     fn presets_by_name_and_bad_input() {

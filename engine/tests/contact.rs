@@ -387,6 +387,76 @@ fn box_on_incline_sticks_and_slides() {
     }
 }
 
+/// The Hunt–Crossley ground of issue 29 item 6: k 2e6 N/m^1.5, b 9e5
+/// N·s/m^2.5, μ 0.5, exponent 1.5.
+fn hunt_crossley_ground() -> GroundMaterial {
+    let (k, b) = (2e6, 9e5);
+    GroundMaterial::custom(k, b, 0.5)
+        .unwrap()
+        .with_law(NormalLaw::HuntCrossley { exponent: 1.5 }, k, b)
+        .unwrap()
+}
+
+/// How far (m, along the slope, downhill) the flat box of
+/// [`box_on_incline_sticks_and_slides`] moves on a 20° incline of `mat`
+/// in 2 s from rest at its static depth, stepped at `dt` with RK4, and how
+/// far in the last second; with the contacts' states at the end.
+fn box_creep_on_20_degrees(mat: GroundMaterial, dt: f64) -> (f64, f64, Vec<ContactState>) {
+    let mass = BOX_MASS_KG;
+    let (inertia, h, corners) = flat_box(0.0, ContactKind::Torso);
+    let theta = 20f64.to_radians();
+    let incline = Incline::new(theta, DVec2::INFINITY).unwrap();
+    let terrain =
+        TerrainUnion::new().with(TerrainPatch::at_origin(TerrainShape::Incline(incline), mat));
+    let mut sim = Sim::new(mass, inertia, corners, terrain);
+    sim.model.gravity = DVec3::new(0.0, 0.0, -G);
+    let rot = DQuat::from_rotation_y(-theta);
+    let n = rot * DVec3::Z;
+    let sink = mat
+        .law
+        .static_depth(mat.stiffness, mass * G * theta.cos() / 4.0);
+    sim.set_pose(n * (h.z - sink), rot);
+    sim.init_contacts();
+    let downhill = -(rot * DVec3::X);
+    let x0 = sim.pos().dot(downhill);
+    let steps = (2.0 / dt).round() as usize;
+    let mut x1 = x0;
+    for k in 1..=steps {
+        sim.step(dt);
+        if k == steps / 2 {
+            x1 = sim.pos().dot(downhill);
+        }
+    }
+    let x2 = sim.pos().dot(downhill);
+    (x2 - x0, x2 - x1, sim.states.clone())
+}
+
+/// Inside the friction cone a Hunt–Crossley ground holds: the 10 kg box on
+/// a 20° incline (tan 20° = 0.36 < μ = 0.5) moves less than 1 mm in 2 s,
+/// at the scenarios' dt = 0.5 ms and at 0.1 ms. It crept 32 mm when the
+/// tangential gains were the normal law's numbers (issue 29, item 6). The
+/// 1 mm bound is what sticking allows: each corner's anchor spring
+/// deflects by its shear over `k_t` (m g sin θ / 4 / k_t ≈ 0.09 mm) plus the
+/// touchdown transient from the static depth; no creep goes on in the last
+/// second (< 10 µm), and every corner sticks at the end.
+#[test]
+fn hunt_crossley_ground_holds_a_box_inside_the_friction_cone() {
+    let mat = hunt_crossley_ground();
+    for dt in [5e-4, 1e-4] {
+        let (moved, last_second, states) = box_creep_on_20_degrees(mat, dt);
+        eprintln!("dt {dt}: moved {moved:.3e} m, {last_second:.3e} m in the last second");
+        assert!(moved.abs() < 1e-3, "dt {dt}: moved {moved} m in 2 s");
+        assert!(
+            last_second.abs() < 1e-5,
+            "dt {dt}: crept {last_second} m in the last second"
+        );
+        assert!(
+            states.iter().all(|s| s.in_contact && !s.slipping),
+            "dt {dt}: {states:?}"
+        );
+    }
+}
+
 /// The force [`contact::update_after_step`] keeps for the next evaluation
 /// at the same kinematics is, bit for bit, what a fresh evaluation finds
 /// there against the moved anchors: a tilted box dropped with a sideways

@@ -39,6 +39,13 @@ pub fn run(a: ExportArgs) -> Result<(), CliError> {
             "warning: {}: read up to an unreadable part ({e}); exporting what came before",
             a.log.display()
         );
+    } else if !contents.metadata.is_empty() && !contents.metadata.contains_key("run") {
+        // a killed run's log reads whole to its last chunk, but has no
+        // `run` record (written at the end)
+        eprintln!(
+            "warning: {}: the log has no 'run' record (the run was killed); exporting what it holds",
+            a.log.display()
+        );
     }
     let files = export_csv(&contents, &a.csv)?;
     for f in files {

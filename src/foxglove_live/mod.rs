@@ -34,7 +34,9 @@ use crate::error::{CliError, bad};
 use crate::log::encode::{RobotNames, RobotTopic, WORLD_FRAME, encode_robot, encode_transforms};
 use crate::log::schema::Schema;
 use crate::log::writer::{SCENE_TOPIC, TERRAIN_TOPIC, TF_TOPIC};
-use crate::monitor::{FrameReader, RobotFrame, RobotPlan, SceneMessage, SceneReader, list_worlds};
+use crate::monitor::{
+    FrameReader, RobotFrame, RobotPlan, SceneMessage, SceneReader, cleanup_dead_nodes, list_worlds,
+};
 
 /// Default port of the Foxglove WebSocket server (Foxglove's own default).
 pub const DEFAULT_PORT: u16 = 8765;
@@ -54,8 +56,16 @@ const LIVE_TOPICS: [RobotTopic; 7] = [
     RobotTopic::Feet,
 ];
 
-/// A quiet world (no instant) is checked for having ended after this long.
-const QUIET_CHECK: Duration = Duration::from_millis(500);
+/// A quiet world (no instant) is checked for having ended (its frames
+/// service has no publisher) after this long: a cheap read of shared
+/// memory, often enough to see a world end before the next world of that
+/// name starts (which is handled either way, [`Live::on_scene`]).
+const QUIET_CHECK: Duration = Duration::from_millis(50);
+
+/// A world quiet for this long is also checked for a dead run (killed, its
+/// publisher never removed): dead nodes' resources are cleaned up, so its
+/// publisher goes and the world is seen to end.
+const DEAD_CHECK: Duration = Duration::from_secs(1);
 
 /// Options of a bridge.
 #[derive(Debug, Clone)]
@@ -242,6 +252,19 @@ impl Live {
         });
     }
 
+    /// The world ended: its robots' channels are unadvertised (pose,
+    /// twist, …, metrics); `/tf`, `/scene` and `/terrain` stay, the scene
+    /// showing the last instant until the next world's replaces it.
+    fn end_world(&mut self) {
+        let keep = [SCENE_TOPIC, TERRAIN_TOPIC, TF_TOPIC]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        self.close_others(&keep);
+        self.robots.clear();
+        self.metrics.clear();
+    }
+
     /// A new world: its robots and scene replace the previous world's.
     fn new_world(&mut self) {
         if self.scene.is_some() {
@@ -253,7 +276,10 @@ impl Live {
         self.next_ns = 0;
     }
 
-    fn on_scene(&mut self, msg: SceneMessage) {
+    /// Takes a scene message; true when it began another world under the
+    /// same services (a new run whose predecessor's end went unseen).
+    fn on_scene(&mut self, msg: SceneMessage) -> bool {
+        let mut began = false;
         match msg {
             SceneMessage::Scene {
                 version,
@@ -262,6 +288,14 @@ impl Live {
                 scene,
                 terrain,
             } => {
+                if version == 0 && self.scene.is_some() {
+                    // another world under this name, whose predecessor's end
+                    // went unseen (the services passed from one run to the
+                    // next while held open): the old robots' channels close
+                    // below, and the old entities are deleted
+                    self.new_world();
+                    began = true;
+                }
                 let mut keep: std::collections::BTreeSet<String> =
                     [SCENE_TOPIC, TERRAIN_TOPIC, TF_TOPIC]
                         .iter()
@@ -327,6 +361,7 @@ impl Live {
                 }
             }
         }
+        began
     }
 
     /// Sends the scene, the terrain and any metrics (again).
@@ -505,12 +540,12 @@ pub fn serve(server: &Server, opts: &BridgeOptions, stop: &AtomicBool) -> Result
         }
         eprintln!("foxglove: serving world '{world}'");
         live.new_world();
-        let mut last = Instant::now();
+        let (mut last, mut last_dead_check) = (Instant::now(), Instant::now());
         loop {
             if stop.load(Ordering::Relaxed) {
                 // the last instants and messages, then stop
                 while let Some(m) = scene.try_next().map_err(err)? {
-                    live.on_scene(m);
+                    let _ = live.on_scene(m);
                 }
                 while let Some(f) = frames.try_next().map_err(err)? {
                     live.on_frames(&f);
@@ -518,7 +553,9 @@ pub fn serve(server: &Server, opts: &BridgeOptions, stop: &AtomicBool) -> Result
                 return Ok(());
             }
             while let Some(m) = scene.try_next().map_err(err)? {
-                live.on_scene(m);
+                if live.on_scene(m) {
+                    eprintln!("foxglove: a new run of world '{world}'");
+                }
             }
             if server.resend.0.swap(false, Ordering::Relaxed) {
                 live.send_rare();
@@ -533,10 +570,34 @@ pub fn serve(server: &Server, opts: &BridgeOptions, stop: &AtomicBool) -> Result
                 continue;
             }
             if last.elapsed() >= QUIET_CHECK {
+                if last_dead_check.elapsed() >= DEAD_CHECK {
+                    cleanup_dead_nodes::<iceoryx2::prelude::ipc_threadsafe::Service>();
+                    last_dead_check = Instant::now();
+                }
                 if frames.ended() {
+                    // the last messages (the metrics); the scene first: the
+                    // frames were drained before the quiet, so any queued
+                    // now are a next run's, which its scene precedes
+                    let mut began = false;
                     while let Some(m) = scene.try_next().map_err(err)? {
-                        live.on_scene(m);
+                        began |= live.on_scene(m);
                     }
+                    while let Some(f) = frames.try_next().map_err(err)? {
+                        live.on_frames(&f);
+                    }
+                    if began || !frames.ended() {
+                        // the next run of this name took the services over
+                        // meanwhile (its scene may come next): serve it, its
+                        // channels already advertised stay
+                        if began {
+                            eprintln!("foxglove: a new run of world '{world}'");
+                        }
+                        last = Instant::now();
+                        continue;
+                    }
+                    // the world's channels go, and its services are let go
+                    // (dropping the readers) so that nothing of it is held
+                    live.end_world();
                     break;
                 }
                 last = Instant::now();
@@ -608,5 +669,62 @@ impl BridgeThread {
                 Err(_) => eprintln!("warning: foxglove: the bridge thread failed"),
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(version: u64, robot: &str) -> SceneMessage {
+        SceneMessage::Scene {
+            version,
+            t_ns: 0,
+            robots: vec![RobotPlan {
+                name: robot.into(),
+                joints: Vec::new(),
+                feet: Vec::new(),
+                links: Vec::new(),
+            }],
+            scene: r#"{"deletions":[],"entities":[]}"#.into(),
+            terrain: String::new(),
+        }
+    }
+
+    fn topics(live: &Live) -> Vec<&str> {
+        live.channels.keys().map(String::as_str).collect()
+    }
+
+    /// A world that ends unadvertises its robots' channels; a new run
+    /// under the same services (its predecessor's end unseen) replaces the
+    /// robots' channels and deletes the old scene's entities.
+    #[test]
+    fn a_new_world_replaces_the_last_ones_channels() {
+        let mut live = Live::new(Context::new(), None);
+        live.new_world();
+        assert!(!live.on_scene(scene(0, "rex")));
+        assert!(
+            topics(&live).contains(&"/rex/base_pose"),
+            "{:?}",
+            topics(&live)
+        );
+        // a later robot list of the same run is no new world
+        assert!(!live.on_scene(scene(1, "rex")));
+        assert!(!live.shown_before);
+        // the next run's first scene, the end unseen
+        assert!(live.on_scene(scene(0, "max")));
+        assert!(live.shown_before);
+        let t = topics(&live);
+        assert!(t.contains(&"/max/base_pose"), "{t:?}");
+        assert!(!t.iter().any(|t| t.starts_with("/rex/")), "{t:?}");
+        // the world ends: only the world's channels stay
+        live.end_world();
+        assert!(live.robots.is_empty());
+        let t = topics(&live);
+        assert!(
+            t.iter()
+                .all(|t| [SCENE_TOPIC, TERRAIN_TOPIC, TF_TOPIC].contains(t)),
+            "{t:?}"
+        );
     }
 }

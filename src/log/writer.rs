@@ -10,15 +10,21 @@
 //! compression is single-threaded LZ4 at a fixed level, and channel ids are
 //! given in first-use order. Two runs of one scenario write identical bytes.
 //!
-//! Durability: the file is written without a user-space buffer, so every
-//! finished chunk is in the operating system's hands at once; a killed
-//! process leaves a file whose complete chunks a streaming reader recovers
-//! (see [`super::read`]).
+//! Durability: each chunk is written whole, once complete, in one write
+//! followed by a provisional end (a DataEnd record, a Footer without a
+//! summary, the magic) that the next chunk, or the real end, overwrites
+//! (`LogFile`). So after every chunk the file on disk is a complete MCAP
+//! file: a killed process leaves a log that any reader reads, in streaming
+//! or seeking mode, up to its last chunk (see [`super::read`]; issue 29,
+//! item 7). A finished log's bytes are the same as with chunks written in
+//! place (mcap's default, a placeholder header patched when the chunk ends).
 
 use std::collections::BTreeMap;
 use std::fs::File;
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -166,7 +172,7 @@ impl McapLog {
             path: path.display().to_string(),
             message,
         };
-        let file = File::create(path).map_err(|e| err(e.to_string()))?;
+        let file = LogFile::new(File::create(path).map_err(|e| err(e.to_string()))?);
         let mut writer = WriteOptions::new()
             .profile(PROFILE)
             .library(LIBRARY)
@@ -174,7 +180,9 @@ impl McapLog {
             .compression_level(LZ4_LEVEL)
             .compression_threads(0)
             .chunk_size(Some(CHUNK_SIZE_BYTES))
-            .create(file)
+            // chunks built whole in memory, not patched in place
+            .disable_seeking(true)
+            .create(file.clone())
             .map_err(|e| err(e.to_string()))?;
         for (name, map) in metadata {
             writer
@@ -184,10 +192,12 @@ impl McapLog {
                 })
                 .map_err(|e| err(e.to_string()))?;
         }
+        // the header and the metadata on disk at once, as a complete file
+        file.commit(true).map_err(|e| err(e.to_string()))?;
         let (tx, rx) = sync_channel(CHANNEL_CAPACITY);
         let thread = std::thread::Builder::new()
             .name("quadsim-log".into())
-            .spawn(move || write_loop(writer, rx, ground))
+            .spawn(move || write_loop(writer, file, rx, ground))
             .map_err(|e| err(e.to_string()))?;
         Ok(McapLog {
             tx,
@@ -242,7 +252,7 @@ struct Channels {
 }
 
 impl Channels {
-    fn id(&mut self, w: &mut Writer<File>, topic: &str, schema: Schema) -> Result<u16, String> {
+    fn id(&mut self, w: &mut Writer<LogFile>, topic: &str, schema: Schema) -> Result<u16, String> {
         if let Some(&id) = self.topics.get(topic) {
             return Ok(id);
         }
@@ -269,9 +279,120 @@ impl Channels {
     }
 }
 
+/// The log file as the MCAP writer sees it. What the writer hands over
+/// (with `disable_seeking`, each chunk whole once it is complete, then its
+/// message indexes; metadata records; at the end the summary section)
+/// collects in memory and reaches the file at a [`Self::commit`], in one
+/// write at the end of what was committed before. A commit that is not the
+/// last appends a provisional end: a DataEnd record (no data-section CRC),
+/// a Footer without a summary (`summary_start` 0) and the magic, which the
+/// next commit overwrites. So the file on disk is a complete MCAP file
+/// after every commit.
+///
+/// The one failure left: a SIGKILL that lands inside a commit's write (tens
+/// of microseconds per chunk) can make the kernel stop that write at a page
+/// boundary, leaving a torn last chunk and no end; quadsim's own reader
+/// still recovers every complete chunk of such a file.
+#[derive(Clone)]
+struct LogFile(Arc<Mutex<LogFileState>>);
+
+struct LogFileState {
+    file: File,
+    /// Bytes handed over since the last commit.
+    pending: Vec<u8>,
+    /// Bytes committed (the provisional end, if any, lies after them).
+    committed: u64,
+}
+
+/// The provisional end: DataEnd (data-section CRC 0: none), Footer
+/// (summary_start 0, summary_offset_start 0, summary CRC 0), magic.
+const PROVISIONAL_END: [u8; 50] = {
+    let mut end = [0u8; 50];
+    end[0] = mcap::records::op::DATA_END;
+    end[1] = 4; // record length, u64 LE; the u32 CRC (0) follows
+    end[13] = mcap::records::op::FOOTER;
+    end[14] = 20; // record length: two u64 offsets and a u32 CRC, all 0
+    let mut i = 0;
+    while i < 8 {
+        end[42 + i] = mcap::MAGIC[i];
+        i += 1;
+    }
+    end
+};
+
+impl LogFile {
+    fn new(file: File) -> Self {
+        Self(Arc::new(Mutex::new(LogFileState {
+            file,
+            pending: Vec::with_capacity(1 << 20),
+            committed: 0,
+        })))
+    }
+
+    fn state(&self) -> std::sync::MutexGuard<'_, LogFileState> {
+        // the state stays consistent between calls: a poisoned lock is usable
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Writes what was handed over since the last commit, in one write,
+    /// followed by the provisional end unless this is the `last` commit
+    /// (then the file is cut to what was committed).
+    fn commit(&self, provisional_end: bool) -> std::io::Result<()> {
+        let mut guard = self.state();
+        let s = &mut *guard;
+        if s.pending.is_empty() && provisional_end {
+            return Ok(());
+        }
+        let n = s.pending.len() as u64;
+        if provisional_end {
+            s.pending.extend_from_slice(&PROVISIONAL_END);
+        }
+        s.file.seek(SeekFrom::Start(s.committed))?;
+        s.file.write_all(&s.pending)?;
+        s.committed += n;
+        s.pending.clear();
+        if !provisional_end {
+            s.file.set_len(s.committed)?;
+        }
+        Ok(())
+    }
+
+    /// The file's size on disk.
+    fn len(&self) -> u64 {
+        self.state().file.metadata().map_or(0, |m| m.len())
+    }
+}
+
+impl Write for LogFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.state().pending.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Seek for LogFile {
+    /// Only asks for the position: the writer appends (`disable_seeking`).
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        let s = self.state();
+        let end = s.committed + s.pending.len() as u64;
+        match pos {
+            SeekFrom::Current(0) | SeekFrom::End(0) => Ok(end),
+            SeekFrom::Start(p) if p == end => Ok(end),
+            _ => Err(std::io::Error::new(
+                std::io::ErrorKind::Unsupported,
+                "the log is written in order",
+            )),
+        }
+    }
+}
+
 /// The writer thread's state.
 struct Output {
-    w: Writer<File>,
+    w: Writer<LogFile>,
     channels: Channels,
     names: Vec<RobotNames>,
     topics: Vec<Vec<String>>,
@@ -368,7 +489,8 @@ impl Output {
 }
 
 fn write_loop(
-    w: Writer<File>,
+    w: Writer<LogFile>,
+    file: LogFile,
     rx: Receiver<Cmd>,
     ground: GroundMesh,
 ) -> Result<WriterStats, String> {
@@ -391,7 +513,8 @@ fn write_loop(
     let finish = |mut out: Output, busy: Duration| -> Result<WriterStats, String> {
         out.w.finish().map_err(|e| e.to_string())?;
         let file = out.w.into_inner();
-        out.stats.file_bytes = file.metadata().map(|m| m.len()).unwrap_or(0);
+        file.commit(false).map_err(|e| e.to_string())?;
+        out.stats.file_bytes = file.len();
         out.stats.busy_s = busy.as_secs_f64();
         out.stats.cpu_s = thread_cpu_s();
         Ok(out.stats)
@@ -419,6 +542,8 @@ fn write_loop(
                 return finish(out, busy);
             }
         }
+        // a chunk completed by these records goes to disk whole
+        file.commit(true).map_err(|e| e.to_string())?;
         busy += start.elapsed();
     }
     // every sender dropped without `Finish`: still close the file properly

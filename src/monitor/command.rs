@@ -119,7 +119,8 @@ impl std::fmt::Debug for CommandReceiver {
 }
 
 impl CommandReceiver {
-    /// Creates `quadsim/<world>/commands` for `n_robots` robots; with
+    /// Creates (or opens, when readers of an ended world of the same name
+    /// hold it) `quadsim/<world>/commands` for `n_robots` robots; with
     /// `lockstep`, [`Self::before_step`] waits up to that long per tick.
     pub fn create(
         world: &str,
@@ -143,12 +144,22 @@ impl CommandReceiver {
             .subscriber_max_buffer_size(256)
             .history_size(0)
             .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| fail("cannot create the service", &e))?;
+            // a commander of an ended world of the same name may still hold
+            // the service: it is opened, as the monitor's are (issue 30)
+            .open_or_create()
+            .map_err(|e| fail("cannot open or create the service", &e))?;
         let subscriber = port_factory
             .subscriber_builder()
             .create()
-            .map_err(|e| fail("cannot create the subscriber", &e))?;
+            .map_err(|e| match e {
+                iceoryx2::port::subscriber::SubscriberCreateError::ExceedsMaxSupportedSubscribers => {
+                    MonitorError::new(format!(
+                        "{service}: another running quadsim takes this world's commands; \
+                         choose another --world-name"
+                    ))
+                }
+                e => fail("cannot create the subscriber", &e),
+            })?;
         Ok(Self {
             subscriber,
             port_factory,

@@ -7,9 +7,10 @@ use std::sync::Arc;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
-use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenOrCreateError;
 use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use quadsim_systems::{LogRecord, LogSink, Records, RobotInfo, SampleView, ViewRecord};
@@ -91,8 +92,15 @@ impl std::fmt::Debug for FramePublisher {
 }
 
 impl FramePublisher {
-    /// Creates the services `quadsim/<world>/frames` and `quadsim/<world>/header`
-    /// for `n_robots` robots, after removing what dead processes left behind.
+    /// Creates the services `quadsim/<world>/frames`, `…/header` and
+    /// `…/scene` for `n_robots` robots, after removing what dead processes
+    /// left behind, and their publishers.
+    ///
+    /// A service that already exists is opened: readers of an ended world
+    /// of the same name (a dashboard, a Foxglove bridge) still hold its
+    /// services, and they keep them across worlds (issue 30); they see the
+    /// new world's header and scene. A world of that name that is still
+    /// running is an error naming it (each service takes one publisher).
     pub fn create(
         world: &str,
         n_robots: usize,
@@ -111,22 +119,21 @@ impl FramePublisher {
             .map_err(|e| fail("cannot create an iceoryx2 node", &e))?;
         cleanup_dead_nodes::<Svc>();
         // the header first: a reader that sees the frames service finds it
-        let header_name = service_name(&header_service(world))?;
         let header = node
-            .service_builder(&header_name)
+            .service_builder(&service_name(&header_service(world))?)
             .publish_subscribe::<[u8]>()
             .max_publishers(1)
             .max_subscribers(MAX_SUBSCRIBERS)
             .subscriber_max_buffer_size(2)
             .history_size(1)
             .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| fail("cannot create the header service", &e))?
+            .open_or_create()
+            .map_err(|e| open_or_create_error(world, "header", e))?
             .publisher_builder()
             .initial_max_slice_len(4096)
             .allocation_strategy(AllocationStrategy::PowerOfTwo)
             .create()
-            .map_err(|e| fail("cannot create the header publisher", &e))?;
+            .map_err(|e| publisher_error(world, "header", e))?;
         let scene_service = node
             .service_builder(&service_name(&scene_service(world))?)
             .publish_subscribe::<[u8]>()
@@ -135,32 +142,31 @@ impl FramePublisher {
             .subscriber_max_buffer_size(4)
             .history_size(2)
             .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| fail("cannot create the scene service", &e))?;
+            .open_or_create()
+            .map_err(|e| open_or_create_error(world, "scene", e))?;
         let scene = scene_service
             .publisher_builder()
             .initial_max_slice_len(64 * 1024)
             .allocation_strategy(AllocationStrategy::PowerOfTwo)
             .create()
-            .map_err(|e| fail("cannot create the scene publisher", &e))?;
-        let frames_name = service_name(&frames_service(world))?;
+            .map_err(|e| publisher_error(world, "scene", e))?;
         let frames_service = node
-            .service_builder(&frames_name)
+            .service_builder(&service_name(&frames_service(world))?)
             .publish_subscribe::<[RobotFrame]>()
             .max_publishers(1)
             .max_subscribers(MAX_SUBSCRIBERS)
             .subscriber_max_buffer_size(SUBSCRIBER_BUFFER_FRAMES)
             .history_size(0)
             .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| fail("cannot create the frames service", &e))?;
+            .open_or_create()
+            .map_err(|e| open_or_create_error(world, "frames", e))?;
         let frames = frames_service
             .publisher_builder()
             .initial_max_slice_len(n_robots.max(1))
             .allocation_strategy(AllocationStrategy::Static)
             .max_loaned_samples(1)
             .create()
-            .map_err(|e| fail("cannot create the frames publisher", &e))?;
+            .map_err(|e| publisher_error(world, "frames", e))?;
         Ok(Self {
             frames,
             header,
@@ -341,6 +347,41 @@ impl FramePublisher {
     pub fn refresh(&self) {
         let _ = self.header.update_connections();
     }
+}
+
+/// The error of opening or creating one of `world`'s services (`what`:
+/// frames, header, scene).
+fn open_or_create_error(
+    world: &str,
+    what: &str,
+    e: PublishSubscribeOpenOrCreateError,
+) -> MonitorError {
+    use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError as Open;
+    MonitorError::new(match e {
+        PublishSubscribeOpenOrCreateError::PublishSubscribeOpenError(Open::IncompatibleTypes) => {
+            format!(
+                "world '{world}': its {what} service exists with another payload type \
+                 (a world of another quadsim version, layout {TYPE_NAME} v{LAYOUT_VERSION} here); \
+                 choose another --world-name"
+            )
+        }
+        PublishSubscribeOpenOrCreateError::PublishSubscribeOpenError(e) => format!(
+            "world '{world}': its {what} service exists with other settings ({e:?}); \
+             choose another --world-name"
+        ),
+        e => format!("world '{world}': cannot create the {what} service: {e:?}"),
+    })
+}
+
+/// The error of creating the publisher of one of `world`'s services.
+fn publisher_error(world: &str, what: &str, e: PublisherCreateError) -> MonitorError {
+    MonitorError::new(match e {
+        PublisherCreateError::ExceedsMaxSupportedPublishers => format!(
+            "world '{world}' is being published by another running quadsim \
+             (its {what} service has its one publisher); choose another --world-name"
+        ),
+        e => format!("world '{world}': cannot create the {what} publisher: {e:?}"),
+    })
 }
 
 /// The monitor channel's sink (see [`quadsim_systems::MonitorChannel`]). It

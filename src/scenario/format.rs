@@ -213,9 +213,14 @@ pub struct CustomGround {
     pub exponent: Option<f64>,
     /// Hybrid law: depth where stiffening starts (m).
     pub hybrid_depth_m: Option<f64>,
-    /// Stiffness of the tangential (stick) spring (N/m). Default: the normal stiffness.
+    /// Stiffness of the tangential (stick) spring (N/m, whatever the law).
+    /// Default: the normal stiffness (`linear`, `hybrid`); for
+    /// `hunt_crossley`, the law's tangent stiffness at the static depth under
+    /// a 70 N contact load (`GroundMaterial::default_tangential`).
     pub tangential_stiffness_n_per_m: Option<f64>,
-    /// Damping of the tangential (stick) spring (N·s/m). Default: a quarter of the normal damping.
+    /// Damping of the tangential (stick) spring (N·s/m, whatever the law).
+    /// Default: a quarter of the normal damping (`linear`, `hybrid`); for
+    /// `hunt_crossley`, a quarter of `b δⁿ` at that depth.
     pub tangential_damping_ns_per_m: Option<f64>,
     /// Hybrid law: dimensionless stiffening s (default 1; stiffness k (1 + 2 s (δ − δ₀)/δ₀) beyond δ₀).
     pub hybrid_stiffening: Option<f64>,

@@ -161,6 +161,9 @@ async def run(args):
                 scene = json.loads(payload)
         entities = [e["id"] for e in scene["entities"]]
         assert f"{args.robot}/{args.torso}" in entities, entities[:5]
+        second = None
+        if args.then_robot:
+            second = await follow(ws, channels, args)
         print(
             json.dumps(
                 {
@@ -169,9 +172,72 @@ async def run(args):
                     "received": received,
                     "counts": counts,
                     "tf": tf,
+                    "second": second,
                 }
             )
         )
+
+
+async def follow(ws, channels, args):
+    """Stays connected while the first robot's world ends and another
+    world, with robot `--then-robot`, begins: the first robot's channels
+    must be unadvertised and the new robot's advertised, and its poses
+    must arrive on the same connection.
+
+    The `foxglove` crate (0.30) sends a channel's advertisement before it
+    registers the channel for the client, so a subscription that answers
+    at once can meet "Unknown channel ID" (a status message); the client
+    subscribes again then, to the same channel (a few times at most), and
+    reports how often."""
+    first = {i for i, c in channels.items() if c["topic"].startswith(f"/{args.robot}/")}
+    gone, topic, sub_id, received = set(), f"/{args.then_robot}/base_pose", 1000, 0
+    target, resubscribed = None, 0
+
+    async def subscribe():
+        await ws.send(
+            json.dumps(
+                {"op": "subscribe", "subscriptions": [{"id": sub_id, "channelId": target}]}
+            )
+        )
+
+    while received < 10:
+        msg = await ws.recv()
+        if isinstance(msg, str):
+            m = json.loads(msg)
+            if m["op"] == "unadvertise":
+                gone.update(m["channelIds"])
+            elif m["op"] == "advertise":
+                for c in m["channels"]:
+                    channels[c["id"]] = c
+                    if c["topic"] == topic and target is None:
+                        target = c["id"]
+                        await subscribe()
+            elif (
+                m["op"] == "status"
+                and target is not None
+                and target not in gone
+                and m.get("message") == f"Unknown channel ID: {target}"
+                and resubscribed < 5
+            ):
+                resubscribed += 1
+                await asyncio.sleep(0.05)
+                await subscribe()
+            STATE["second"] = {
+                "gone": len(gone),
+                "target": target,
+                "received": received,
+                "resubscribed": resubscribed,
+            }
+            continue
+        sub = struct.unpack_from("<I", msg, 1)[0]
+        if sub == sub_id:
+            received += 1
+    return {
+        "robot": args.then_robot,
+        "received": received,
+        "first_channels_unadvertised": first <= gone,
+        "resubscribed": resubscribed,
+    }
 
 
 def main():
@@ -181,6 +247,7 @@ def main():
     p.add_argument("--torso", default="torso")
     p.add_argument("--messages", type=int, default=100)
     p.add_argument("--timeout", type=float, default=60.0)
+    p.add_argument("--then-robot", default=None)
     args = p.parse_args()
     try:
         asyncio.run(asyncio.wait_for(run(args), args.timeout))

@@ -35,7 +35,7 @@ pub mod friction;
 pub mod law;
 pub mod stability;
 
-pub use crate::material::{GroundMaterial, GroundPreset};
+pub use crate::material::{GroundMaterial, GroundPreset, NOMINAL_CONTACT_LOAD_N};
 pub use error::ContactError;
 pub use law::NormalLaw;
 pub use stability::{StabilityWarning, check_stability};
