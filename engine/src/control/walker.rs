@@ -194,11 +194,6 @@ pub struct WalkerParams {
     /// foot's target crossing a step's edge moves the fit at once, and the
     /// torso's height spring would throw the body up (0.1 s; 0: none).
     pub ground_plane_filter_s: f64,
-    /// The whole-body layer's knee guard ([`Self::knee_guard_rad`] for the
-    /// `τ = Jᵀ f` mapping): a safety net against a knee snapping through
-    /// straight, smaller, since the layer itself keeps the legs bent on
-    /// open ground (0.2 rad; ≤ 0: none).
-    pub whole_body_knee_guard_rad: f64,
 }
 
 /// The body-force planner of a [`Walker`].
@@ -315,7 +310,6 @@ impl WalkerParams {
             swing_max_acc_mps2: 0.0,
             follow_ground_plane: false,
             ground_plane_filter_s: 0.1,
-            whole_body_knee_guard_rad: 0.2,
         }
     }
 }
@@ -668,21 +662,8 @@ impl Walker {
     /// targets on the far side (observed at 0.75 m/s: every joint saturated).
     /// A one-sided PD (the swing gains of that joint) toward the margin.
     fn guard_knee(&self, leg: usize, nv0: usize, q: &[f64], v: &[f64], tau_joints: &mut [f64]) {
-        let margin = self.params.knee_guard_rad;
-        self.guard_knee_at(leg, margin, nv0, q, v, tau_joints);
-    }
-
-    /// [`Self::guard_knee`] with the given margin (rad).
-    fn guard_knee_at(
-        &self,
-        leg: usize,
-        margin: f64,
-        nv0: usize,
-        q: &[f64],
-        v: &[f64],
-        tau_joints: &mut [f64],
-    ) {
         let LegInfo { qi, vi, dof, .. } = self.leg_info[leg];
+        let margin = self.params.knee_guard_rad;
         if dof < 3 || margin <= 0.0 {
             return;
         }
@@ -1176,17 +1157,6 @@ impl Walker {
                 &second,
                 tau_joints,
             );
-            // the whole-body layer tracks the feet, not the knees: a leg
-            // stretched at the end of its stance (or lifting off) can snap
-            // through the straight knee into the other branch, and then
-            // walks on it. The guard keeps every knee on its branch.
-            for i in 0..nl {
-                let margin = self.params.whole_body_knee_guard_rad;
-                self.guard_knee_at(i, margin, nv0, q, v, tau_joints);
-            }
-            for (t, lim) in tau_joints.iter_mut().zip(&model.effort_limit[nv0..]) {
-                *t = t.clamp(-lim, *lim);
-            }
             return;
         }
 
