@@ -8,7 +8,8 @@
 //! [3 s, 8 s] within 5 % of the command, roll and pitch inside ±0.15 rad over
 //! the whole run (the command's ramp from rest included). The same holds
 //! for the convex-MPC planner (`planner = "mpc"`), at 1.0 and 1.25 m/s,
-//! and for the default walker's pace, bound and pronk at 0.5 m/s.
+//! for the default walker's pace, bound and pronk at 0.5 m/s, and for the
+//! default walker carrying a 10 kg box unknown to it and a 15 kg box it knows.
 
 use std::path::Path;
 
@@ -121,5 +122,21 @@ fn mpc_planner_trots_one_and_a_quarter_metres_per_second_from_every_neighbour() 
 fn default_walker_paces_bounds_and_pronks_half_a_metre_per_second_from_every_neighbour() {
     for gait in ["pace", "bound", "pronk"] {
         all_neighbours_hold(0.5, &format!("gait = \"{gait}\""));
+    }
+}
+
+/// A box on the torso (0.3 × 0.2 × 0.1 m, 10 cm above the base origin).
+fn payload(mass_kg: f64, known: bool) -> String {
+    format!(
+        "\n[[robots.payloads]]\nname = \"box\"\nmass_kg = {mass_kg}\nsize_m = [0.3, 0.2, 0.1]\noffset_m = [0.0, 0.0, 0.1]\nknown_to_controller = {known}\n"
+    )
+}
+
+#[test]
+fn default_walker_carries_payloads_at_one_metre_per_second_from_every_neighbour() {
+    // issue 27's payload target is 0–15 kg known and unknown; 15 kg unknown
+    // to the controller does not hold yet (docs/validation.md)
+    for (mass_kg, known) in [(10.0, false), (15.0, true)] {
+        all_neighbours_hold(1.0, &payload(mass_kg, known));
     }
 }
