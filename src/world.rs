@@ -36,6 +36,10 @@ use crate::scenario::{Locator, Scenario, ScenarioError};
 use crate::terrain_spec::{ground_material, terrain_patch};
 use crate::urdf::{UrdfOptions, load_urdf};
 
+/// The whole-body walker's lateral step clip against Raibert's default
+/// (0.12 m for quad16, scaled with the robot): 0.2 m for quad16.
+const WHOLE_BODY_LATERAL_STEP_SCALE: f64 = 0.2 / 0.12;
+
 /// A world ready to run.
 #[derive(Debug)]
 pub struct World {
@@ -867,6 +871,11 @@ fn controller(
                 .unwrap_or(true);
             if wp.whole_body {
                 wp.gait = Gait::long_swing_trot();
+                // room to step sideways after a push: 0.12 m (quad16) is
+                // about the step one 150 N × 0.1 s side push asks for
+                // (docs/validation.md: falls after such pushes from 8
+                // directions, 20 copies each, 51 → 33 of 160)
+                wp.placement.max_step_y_m *= WHOLE_BODY_LATERAL_STEP_SCALE;
             }
             // the torso follows the ground plane under the feet (on slopes
             // and steps), unless asked not to; Study A's mapping keeps its
