@@ -363,10 +363,6 @@ pub enum WalkerError {
 /// A contact supports its foot only if the ground's normal there is within
 /// 60° of vertical ([`Walker::tick`], step 1).
 const SUPPORT_MIN_NORMAL_Z: f64 = 0.5;
-/// ... and the foot is at most this far (m) above its standing height over
-/// the ground the map has beneath it: a foot that meets a 10 cm riser
-/// halfway up has not landed.
-const SUPPORT_MAX_HEIGHT_M: f64 = 0.04;
 
 /// What the walker needs to read each tick besides the model and state.
 #[derive(Clone, Copy, Debug)]
@@ -792,22 +788,18 @@ impl Walker {
             self.feet_world[i] = fp.transform_point(li.point);
         }
         // Only contacts that can carry the foot count: not a foot against a
-        // riser or a wall (a contact normal far from vertical, or the foot
-        // well above the ground the map has beneath it). On open ground
-        // every contact counts.
+        // riser or a wall (a contact normal far from vertical). On open
+        // ground every contact counts. (The map's heights do not decide it:
+        // a blind walker must land on a step its map does not have.)
         let mut support = [false; MAX_FEET];
         let filtered;
         let input = if input.contacts.len() >= nl {
             for (i, s) in support.iter_mut().enumerate().take(nl) {
-                let f = self.feet_world[i];
                 let upward = input
                     .normals
                     .get(i)
                     .is_none_or(|n| n.z >= SUPPORT_MIN_NORMAL_Z);
-                let on_ground = input.terrain.height(f.x, f.y).is_none_or(|g| {
-                    f.z - g - self.leg_info[i].standing_height_m <= SUPPORT_MAX_HEIGHT_M
-                });
-                *s = input.contacts[i] && upward && on_ground;
+                *s = input.contacts[i] && upward;
             }
             filtered = WalkerInput {
                 contacts: &support[..nl],
