@@ -252,23 +252,17 @@ impl Vmc {
         let f_h = glam::DVec2::new(g.stiffness_npm.x, g.stiffness_npm.y) * e_h
             + glam::DVec2::new(g.damping_nspm.x, g.damping_nspm.y) * (v_des_h - v_h);
         let f_xy = to_world(f_h);
-        let f_z = match self.posture {
-            None => {
-                g.stiffness_npm.z * (p.base_height_m - input.height_above_ground_m)
-                    - g.damping_nspm.z * input.base_linear_velocity_mps.z
-            }
-            Some((_, _, rise)) => {
-                g.stiffness_npm.z * (p.base_height_m - input.height_above_ground_m)
-                    + g.damping_nspm.z * (rise - input.base_linear_velocity_mps.z)
-            }
-        } + p.weight_n();
+        // (Study A's still height: a rise of 0, `b (0 − v) = −(b v)` exactly)
+        let (roll_des, pitch_des, rise) = self.posture.unwrap_or((0.0, 0.0, 0.0));
+        let f_z = g.stiffness_npm.z * (p.base_height_m - input.height_above_ground_m)
+            + g.damping_nspm.z * (rise - input.base_linear_velocity_mps.z)
+            + p.weight_n();
 
         let w = input.base_angular_velocity_radps;
         let w_h = to_heading(w.truncate());
         let yaw_err = wrap_pi(yaw_target - yaw);
         let kr = g.stiffness_nm_per_rad;
         let br = g.damping_nms_per_rad;
-        let (roll_des, pitch_des) = self.posture.map_or((0.0, 0.0), |(r, p, _)| (r, p));
         let m_h = glam::DVec2::new(
             kr.x * (roll_des - roll) + br.x * (0.0 - w_h.x),
             kr.y * (pitch_des - pitch) + br.y * (0.0 - w_h.y),

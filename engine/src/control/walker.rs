@@ -922,11 +922,13 @@ impl Walker {
         }
         let ground_z = self.ground.height_m;
         let target_height = self.vmc.params.base_height_m;
-        let planned_rot = if self.ground.slope == DVec2::ZERO {
-            heading
-        } else {
-            let (roll, pitch) = self.ground.roll_pitch_rad();
-            heading * DMat3::from_rotation_y(pitch) * DMat3::from_rotation_x(roll)
+        // the torso's roll and pitch along the plane (none on level ground)
+        let along_ground = (self.ground.slope != DVec2::ZERO).then(|| self.ground.roll_pitch_rad());
+        let planned_rot = match along_ground {
+            None => heading,
+            Some((roll, pitch)) => {
+                heading * DMat3::from_rotation_y(pitch) * DMat3::from_rotation_x(roll)
+            }
         };
         let planned_base = crate::spatial::Transform::new(
             planned_rot,
@@ -1069,13 +1071,13 @@ impl Walker {
         // (the heading frame's entries are `yaw.sin_cos()`: the same bits
         // VMC would compute)
         let heading_sin_cos = (heading.x_axis.y, heading.x_axis.x);
-        if self.ground.slope == DVec2::ZERO {
-            self.vmc.clear_posture();
-        } else {
-            let (roll, pitch) = self.ground.roll_pitch_rad();
-            let v_des = DVec2::new(self.vmc.command.forward_mps, self.vmc.command.lateral_mps);
-            self.vmc
-                .set_posture(roll, pitch, self.ground.rise_rate_mps(v_des));
+        match along_ground {
+            None => self.vmc.clear_posture(),
+            Some((roll, pitch)) => {
+                let v_des = DVec2::new(self.vmc.command.forward_mps, self.vmc.command.lateral_mps);
+                self.vmc
+                    .set_posture(roll, pitch, self.ground.rise_rate_mps(v_des));
+            }
         }
         let mut w = self.vmc.update_at_heading(
             &VmcInput {
