@@ -111,6 +111,22 @@ impl Proc {
     }
 }
 
+/// Starts a Foxglove bridge (`monitor --foxglove --port 0 …`) and waits
+/// for its address: the process and the port it listens on.
+fn spawn_bridge(cmd: Command) -> (Proc, String) {
+    let mut bridge = Proc::spawn(cmd, "foxglove: ws://");
+    let url = bridge
+        .wait_line(Duration::from_secs(30))
+        .unwrap_or_else(|| panic!("no server: {}", bridge.finish(Duration::ZERO).1));
+    let port = url
+        .split("127.0.0.1:")
+        .nth(1)
+        .and_then(|s| s.split(|c: char| !c.is_ascii_digit()).next())
+        .unwrap()
+        .to_string();
+    (bridge, port)
+}
+
 /// Every `/tf` message's transform of `child` in `log.mcap`, by log time.
 fn log_transforms(log: &Path, child: &str) -> Vec<(u64, [f64; 3], [f64; 4])> {
     let log = quadsim::log::read::read_log(log).unwrap();
@@ -164,16 +180,7 @@ fn foxglove_python_client_sees_the_logs_torso_live() {
         "--world",
         &world,
     ]);
-    let mut bridge = Proc::spawn(bridge, "foxglove: ws://");
-    let url = bridge
-        .wait_line(Duration::from_secs(30))
-        .unwrap_or_else(|| panic!("no server: {}", bridge.finish(Duration::ZERO).1));
-    let port = url
-        .split("127.0.0.1:")
-        .nth(1)
-        .and_then(|s| s.split(|c: char| !c.is_ascii_digit()).next())
-        .unwrap()
-        .to_string();
+    let (mut bridge, port) = spawn_bridge(bridge);
     // the run: 3 s at real time, so the client is there for most of it
     let mut run = quadsim();
     run.arg("run")
@@ -262,16 +269,7 @@ fn foxglove_bridge_follows_robots_and_worlds_without_a_restart() {
     let world = world_name("fox2");
     let mut bridge = quadsim();
     bridge.args(["monitor", "--foxglove", "--port", "0", "--world", &world]);
-    let mut bridge = Proc::spawn(bridge, "foxglove: ws://");
-    let url = bridge
-        .wait_line(Duration::from_secs(30))
-        .unwrap_or_else(|| panic!("no server: {}", bridge.finish(Duration::ZERO).1));
-    let port = url
-        .split("127.0.0.1:")
-        .nth(1)
-        .and_then(|s| s.split(|c: char| !c.is_ascii_digit()).next())
-        .unwrap()
-        .to_string();
+    let (mut bridge, port) = spawn_bridge(bridge);
     let second = tmp("fox2-scenario").join("max.toml");
     let src = std::fs::read_to_string(root().join("scenarios/trot_flat.toml")).unwrap();
     assert!(src.contains("name = \"rex\""), "trot_flat's robot is rex");

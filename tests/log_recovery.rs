@@ -222,9 +222,10 @@ fn sigterm_finalises_the_log_and_the_summary() {
     interrupt_with("TERM");
 }
 
-#[test]
-fn a_killed_run_leaves_a_readable_prefix() {
-    let dir = tmp("kill");
+/// A run of a long scenario killed (SIGKILL) once its log passed 300 kB:
+/// its directory under [`tmp`] and its log's path.
+fn killed_run(name: &str) -> (PathBuf, PathBuf) {
+    let dir = tmp(name);
     let scn = dir.join("s.toml");
     std::fs::write(&scn, scenario(3600.0, "\"concrete\"")).unwrap();
     let out = dir.join("run");
@@ -233,6 +234,12 @@ fn a_killed_run_leaves_a_readable_prefix() {
     wait_for_size(&mut child, &log_path, 300_000);
     signal(&child, "KILL");
     let _ = finish(child);
+    (dir, log_path)
+}
+
+#[test]
+fn a_killed_run_leaves_a_readable_prefix() {
+    let (dir, log_path) = killed_run("kill");
     let c = read_log(&log_path).unwrap();
     assert!(
         c.meta("run", "steps").is_none(),
@@ -321,15 +328,7 @@ fn a_killed_run_leaves_a_readable_prefix() {
 #[test]
 #[ignore = "needs python3 with `pip install mcap` (CI runs it with --ignored)"]
 fn a_killed_runs_log_reads_with_pythons_default_mcap_reader() {
-    let dir = tmp("kill-py");
-    let scn = dir.join("s.toml");
-    std::fs::write(&scn, scenario(3600.0, "\"concrete\"")).unwrap();
-    let out = dir.join("run");
-    let mut child = spawn_run(&scn, &out);
-    let log_path = out.join("log.mcap");
-    wait_for_size(&mut child, &log_path, 300_000);
-    signal(&child, "KILL");
-    let _ = finish(child);
+    let (dir, log_path) = killed_run("kill-py");
     let c = read_log(&log_path).unwrap();
     assert!(c.meta("run", "steps").is_none(), "killed: no run record");
     let mut ours = std::collections::BTreeMap::<String, u64>::new();
