@@ -33,10 +33,11 @@
 
 use crate::control::active_set::{ActiveSet, DenseQp, MAX_VARS};
 use crate::control::force_qp::{MAX_FEET, tangent_basis};
+use crate::control::task_space::TaskSpace;
 use crate::data::Data;
 use crate::jacobian::point_jacobian;
 use crate::linalg::{cholesky_dense, cholesky_dense_solve};
-use crate::model::{Model, NO_PARENT};
+use crate::model::Model;
 use glam::{DMat3, DVec3};
 
 /// Weights and damping of the whole-body layer.
@@ -186,15 +187,9 @@ pub struct WholeBody {
     /// Parameters.
     pub params: WbcParams,
     nv: usize,
-    /// The velocity coordinates' tree.
-    tree: DofTree,
     zeros: Vec<f64>,
     h: Vec<f64>,
     m: Vec<f64>,
-    /// `L` of `M = Lᵀ L` (row-major; row `i` at `i`'s ancestors and `i`)
-    /// and `1 / L_ii`.
-    l: Vec<f64>,
-    inv_diag: Vec<f64>,
     qdd: Vec<f64>,
     /// The stacked task rows `J` (`R × nv`) and their targets (bias subtracted).
     rows: Vec<f64>,
@@ -203,25 +198,8 @@ pub struct WholeBody {
     tasks: [(usize, usize); 4],
     /// First row of the swing feet's task.
     swing_row: usize,
-    /// `W` (as rows: row `r` is `L⁻ᵀ J_rᵀ`, `R × nv`) and, per row, the
-    /// range past the base outside which it is zero.
-    w: Vec<f64>,
-    span: Vec<(usize, usize)>,
-    /// `G` and `C` (`R × R`, row stride `R`), `β` (`R`).
-    g: Vec<f64>,
-    cm: Vec<f64>,
-    beta: Vec<f64>,
-    /// One task's `A`, `T = A G`, `Dᵀ = A (I − C G)ᵀ` and `X = Λ A` (rows × R).
-    am: Vec<f64>,
-    tm: Vec<f64>,
-    dm: Vec<f64>,
-    xm: Vec<f64>,
-    /// `E_last G C` for the last task (its rows × R).
-    qm: Vec<f64>,
-    /// `Λ⁻¹` of one task, factored (rows × rows), and its right-hand side.
-    kk: Vec<f64>,
-    y: Vec<f64>,
-    col: Vec<f64>,
+    /// The hierarchy in task space.
+    ts: TaskSpace,
     /// `Z` (nv × 6): how q̈ changes with the base's acceleration change `δ_b`
     /// when every foot keeps its task (`J Z = 0` on each leg).
     z: Vec<f64>,
@@ -244,30 +222,15 @@ impl WholeBody {
         WholeBody {
             params,
             nv,
-            tree: DofTree::of(model),
             zeros: vec![0.0; nv],
             h: vec![0.0; nv],
             m: vec![0.0; nv * nv],
-            l: vec![0.0; nv * nv],
-            inv_diag: vec![0.0; nv],
             qdd: vec![0.0; nv],
             rows: vec![0.0; MAX_TASK_ROWS * nv],
             target: vec![0.0; MAX_TASK_ROWS],
             tasks: [(0, 0); 4],
             swing_row: 0,
-            w: vec![0.0; MAX_TASK_ROWS * nv],
-            span: vec![(0, 0); MAX_TASK_ROWS],
-            g: vec![0.0; MAX_TASK_ROWS * MAX_TASK_ROWS],
-            cm: vec![0.0; MAX_TASK_ROWS * MAX_TASK_ROWS],
-            beta: vec![0.0; MAX_TASK_ROWS],
-            am: vec![0.0; MAX_ROWS * MAX_TASK_ROWS],
-            tm: vec![0.0; MAX_ROWS * MAX_TASK_ROWS],
-            dm: vec![0.0; MAX_ROWS * MAX_TASK_ROWS],
-            xm: vec![0.0; MAX_ROWS * MAX_TASK_ROWS],
-            qm: vec![0.0; MAX_ROWS * MAX_TASK_ROWS],
-            kk: vec![0.0; MAX_ROWS * MAX_ROWS],
-            y: vec![0.0; MAX_ROWS],
-            col: vec![0.0; nv],
+            ts: TaskSpace::new(model),
             z: vec![0.0; nv * 6],
             qp: Box::default(),
             solver: Box::new(ActiveSet::default()),
@@ -424,11 +387,16 @@ impl WholeBody {
                 return Err(WbcError::MassMatrix);
             }
         } else {
-            self.l.copy_from_slice(&self.m);
-            if !ltl_factor(&mut self.l, &self.tree, nv, &mut self.inv_diag) {
+            if !self.ts.factor(&self.m) {
                 return Err(WbcError::MassMatrix);
             }
-            self.task_space_hierarchy(nb);
+            self.ts.solve(
+                &self.rows,
+                &self.target,
+                &self.tasks,
+                self.params.damping,
+                &mut self.qdd,
+            );
         }
 
         // 6. the QP over δf (δ_b eliminated through the base's rows)
@@ -467,97 +435,6 @@ impl WholeBody {
             *t = s;
         }
         Ok(out)
-    }
-
-    /// The task hierarchy in task space (the type's docs): fills `qdd` from
-    /// the stacked rows, their targets and `L` of `M = Lᵀ L`.
-    fn task_space_hierarchy(&mut self, nb: usize) {
-        let nv = self.nv;
-        let (last_row, last_n) = self.tasks[3];
-        let rt = last_row + last_n;
-        // W = L⁻ᵀ Jᵀ, row by row, and where each row is non-zero past the base
-        for r in 0..rt {
-            let w = &mut self.w[r * nv..(r + 1) * nv];
-            w.copy_from_slice(&self.rows[r * nv..(r + 1) * nv]);
-            solve_lt(&self.l, &self.inv_diag, &self.tree, nv, w);
-            let lo = (nb..nv).find(|&i| w[i] != 0.0).unwrap_or(nv);
-            let hi = (lo..nv).rev().find(|&i| w[i] != 0.0).map_or(lo, |i| i + 1);
-            self.span[r] = (lo, hi);
-        }
-        // G = W Wᵀ: the base's terms and those of the legs both rows move
-        let g = &mut self.g[..rt * rt];
-        for a in 0..rt {
-            let wa = &self.w[a * nv..(a + 1) * nv];
-            let (alo, ahi) = self.span[a];
-            for b in 0..=a {
-                let wb = &self.w[b * nv..(b + 1) * nv];
-                let (blo, bhi) = self.span[b];
-                let mut s = if nb == 6 {
-                    dot6(&wa[..6], &wb[..6])
-                } else {
-                    dot(&wa[..nb], &wb[..nb])
-                };
-                for i in alo.max(blo)..ahi.min(bhi) {
-                    s += wa[i] * wb[i];
-                }
-                g[a * rt + b] = s;
-                g[b * rt + a] = s;
-            }
-        }
-        // the tasks with rows, in order; the one before the last computes
-        // what the last needs of C instead of C itself
-        let mut order = [(0usize, 0usize); 4];
-        let mut n = 0;
-        for &(o, r) in &self.tasks {
-            if r > 0 {
-                order[n] = (o, r);
-                n += 1;
-            }
-        }
-        self.cm[..rt * rt].fill(0.0);
-        self.beta[..rt].fill(0.0);
-        for k in 0..n {
-            let (o, r) = order[k];
-            hierarchy_task(
-                &self.g[..rt * rt],
-                &mut self.cm[..rt * rt],
-                &mut self.beta[..rt],
-                &self.target[o..o + r],
-                TaskShape {
-                    rt,
-                    o,
-                    r,
-                    last: k + 1 == n,
-                    a_from_q: k + 1 == n && k > 0,
-                    next_last: (k + 2 == n).then(|| order[k + 1]),
-                },
-                self.params.damping,
-                TaskScratch {
-                    am: &mut self.am,
-                    tm: &mut self.tm,
-                    dm: &mut self.dm,
-                    xm: &mut self.xm,
-                    qm: &mut self.qm,
-                    kk: &mut self.kk[..r * r],
-                    y: &mut self.y[..r],
-                },
-            );
-        }
-        // q̈ = M⁻¹ Jᵀ β = L⁻¹ (W β)
-        let x = &mut self.col;
-        x.fill(0.0);
-        for r in 0..rt {
-            let b = self.beta[r];
-            if b == 0.0 {
-                continue;
-            }
-            let w = &self.w[r * nv..(r + 1) * nv];
-            axpy(&mut x[..nb], b, &w[..nb]);
-            let (lo, hi) = self.span[r];
-            axpy(&mut x[lo..hi], b, &w[lo..hi]);
-        }
-        solve_l(&self.l, &self.inv_diag, &self.tree, nv, x);
-        self.qdd.copy_from_slice(x);
     }
 
     /// The accelerations (linear, angular; world) the body task asks for:
@@ -780,320 +657,6 @@ fn point_bias(model: &Model, data: &Data, body: usize, point_m: DVec3) -> DVec3 
     let acc = data.acc[body];
     let vel = data.vel[body];
     acc.point_velocity(r) + vel.ang.cross(vel.point_velocity(r)) + model.gravity
-}
-
-/// The velocity coordinates' tree (Featherstone's `λ(i)`: the coordinate
-/// each one's motion is carried by; the free base's six form a chain), kept
-/// as each coordinate's ancestors, nearest first, in one array: the sparse
-/// factor's loops then read their indices instead of chasing parents.
-#[derive(Clone, Debug)]
-struct DofTree {
-    /// Ancestors of coordinate `i`: `anc[start[i]..start[i + 1]]`, nearest first.
-    anc: Vec<usize>,
-    start: Vec<usize>,
-}
-
-impl DofTree {
-    fn of(model: &Model) -> DofTree {
-        let mut parent = vec![usize::MAX; model.nv];
-        for (i, p) in parent.iter_mut().enumerate() {
-            let b = model.v_body[i];
-            if i > model.idx_v[b] {
-                *p = i - 1; // within a multi-DOF joint (the free base)
-                continue;
-            }
-            let mut j = model.parent[b];
-            while j != NO_PARENT {
-                let n = model.joint_type[j].nv();
-                if n > 0 {
-                    *p = model.idx_v[j] + n - 1;
-                    break;
-                }
-                j = model.parent[j];
-            }
-        }
-        let mut anc = Vec::new();
-        let mut start = vec![0];
-        for i in 0..model.nv {
-            let mut j = parent[i];
-            while j != usize::MAX {
-                anc.push(j);
-                j = parent[j];
-            }
-            start.push(anc.len());
-        }
-        DofTree { anc, start }
-    }
-
-    /// Ancestors of coordinate `i`, nearest first.
-    #[inline]
-    fn ancestors(&self, i: usize) -> &[usize] {
-        &self.anc[self.start[i]..self.start[i + 1]]
-    }
-}
-
-/// Factors `M = Lᵀ L` in place (Featherstone 2008, Table 6.3, "LTL"):
-/// `L` lower triangular with row `i` non-zero only at `i`'s ancestors in the
-/// DOF tree and at `i`, so there is no fill-in; `inv_diag` gets `1 / L_ii`.
-/// Returns `false` when `M` is not positive definite.
-fn ltl_factor(h: &mut [f64], tree: &DofTree, n: usize, inv_diag: &mut [f64]) -> bool {
-    for k in (0..n).rev() {
-        let d = h[k * n + k];
-        if d <= 0.0 || !d.is_finite() {
-            return false;
-        }
-        let d = d.sqrt();
-        h[k * n + k] = d;
-        inv_diag[k] = 1.0 / d;
-        let anc = tree.ancestors(k);
-        for &i in anc {
-            h[k * n + i] /= d;
-        }
-        // the ancestors of ancestor i are the rest of k's list
-        for (p, &i) in anc.iter().enumerate() {
-            let lki = h[k * n + i];
-            for &j in &anc[p..] {
-                h[i * n + j] -= lki * h[k * n + j];
-            }
-        }
-    }
-    true
-}
-
-/// `x ← L⁻ᵀ x` for `L` from [`ltl_factor`] (leaves to root).
-fn solve_lt(l: &[f64], inv_diag: &[f64], tree: &DofTree, n: usize, x: &mut [f64]) {
-    for i in (0..n).rev() {
-        if x[i] == 0.0 {
-            continue; // nothing to carry to the ancestors
-        }
-        let xi = x[i] * inv_diag[i];
-        x[i] = xi;
-        let row = &l[i * n..(i + 1) * n];
-        for &j in tree.ancestors(i) {
-            x[j] -= row[j] * xi;
-        }
-    }
-}
-
-/// `x ← L⁻¹ x` for `L` from [`ltl_factor`] (root to leaves).
-fn solve_l(l: &[f64], inv_diag: &[f64], tree: &DofTree, n: usize, x: &mut [f64]) {
-    for i in 0..n {
-        let row = &l[i * n..(i + 1) * n];
-        let mut s = x[i];
-        for &j in tree.ancestors(i) {
-            s -= row[j] * x[j];
-        }
-        x[i] = s * inv_diag[i];
-    }
-}
-
-/// `a · b` in four interleaved partial sums (independent lanes the compiler
-/// can keep in one SIMD register).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0; 4];
-    let ca = a.chunks_exact(4);
-    let cb = b.chunks_exact(4);
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for k in 0..4 {
-            acc[k] += x[k] * y[k];
-        }
-    }
-    let mut s = (acc[0] + acc[2]) + (acc[1] + acc[3]);
-    for (x, y) in ra.iter().zip(rb) {
-        s += x * y;
-    }
-    s
-}
-
-/// `a · b` for six entries (the base's coordinates).
-#[inline]
-fn dot6(a: &[f64], b: &[f64]) -> f64 {
-    let (a, b) = (&a[..6], &b[..6]);
-    (a[0] * b[0] + a[1] * b[1]) + (a[2] * b[2] + a[3] * b[3]) + (a[4] * b[4] + a[5] * b[5])
-}
-
-/// `y ← y + a x`.
-#[inline]
-fn axpy(y: &mut [f64], a: f64, x: &[f64]) {
-    for (yi, xi) in y.iter_mut().zip(x) {
-        *yi += a * xi;
-    }
-}
-
-/// One task's buffers for [`hierarchy_task`] (rows × R, row stride R).
-struct TaskScratch<'a> {
-    am: &'a mut [f64],
-    tm: &'a mut [f64],
-    dm: &'a mut [f64],
-    xm: &'a mut [f64],
-    qm: &'a mut [f64],
-    kk: &'a mut [f64],
-    y: &'a mut [f64],
-}
-
-/// Where a task sits in the hierarchy ([`hierarchy_task`]).
-#[derive(Clone, Copy)]
-struct TaskShape {
-    /// Rows of all tasks (the stride of `G` and `C`).
-    rt: usize,
-    /// The task's first row and its row count.
-    o: usize,
-    r: usize,
-    /// The last task: no `C` to update.
-    last: bool,
-    /// `E_i G C_{i−1}` is in `qm` (the task before computed it).
-    a_from_q: bool,
-    /// The next task's rows when it is the last: compute its `E G C_i`
-    /// into `qm` instead of `C_i`.
-    next_last: Option<(usize, usize)>,
-}
-
-/// Task `i` of the hierarchy in task space ([`WholeBody`]'s docs): `g` is
-/// `G`, `cm` is `C_{i−1}` (zero past `o`), updated to `C_i` unless the task
-/// is the last or the one before it; `beta` gains `A_iᵀ Λ_i e_i`. A task
-/// whose `Λ_i⁻¹` does not factor is skipped, as the dense recursion skips it.
-fn hierarchy_task(
-    g: &[f64],
-    cm: &mut [f64],
-    beta: &mut [f64],
-    target: &[f64],
-    shape: TaskShape,
-    damping: f64,
-    ws: TaskScratch<'_>,
-) {
-    let TaskShape { rt, o, r, .. } = shape;
-    let s = o + r;
-    let TaskScratch {
-        am,
-        tm,
-        dm,
-        xm,
-        qm,
-        kk,
-        y,
-    } = ws;
-    // A = E_i (I − G C): [−G_io C_oo, I] (r × s)
-    for a in 0..r {
-        let arow = &mut am[a * rt..a * rt + s];
-        if shape.a_from_q {
-            for (x, q) in arow[..o].iter_mut().zip(&qm[a * rt..a * rt + o]) {
-                *x = -q;
-            }
-        } else {
-            arow[..o].fill(0.0);
-            let grow = &g[(o + a) * rt..(o + a) * rt + o];
-            for (c, &gc) in grow.iter().enumerate() {
-                axpy(&mut arow[..o], -gc, &cm[c * rt..c * rt + o]);
-            }
-        }
-        arow[o..s].fill(0.0);
-        arow[o + a] = 1.0;
-    }
-    // T = A G (r × s); row a: G's row o + a plus A's first o entries times G's rows
-    for a in 0..r {
-        let trow = &mut tm[a * rt..a * rt + s];
-        trow.copy_from_slice(&g[(o + a) * rt..(o + a) * rt + s]);
-        for d in 0..o {
-            let ad = am[a * rt + d];
-            axpy(trow, ad, &g[d * rt..d * rt + s]);
-        }
-    }
-    // Λ⁻¹ = T Aᵀ + λ I (lower triangle), factored
-    for a in 0..r {
-        for b in 0..=a {
-            let v = dot(&tm[a * rt..a * rt + o], &am[b * rt..b * rt + o]) + tm[a * rt + o + b];
-            kk[a * r + b] = v + if a == b { damping } else { 0.0 };
-        }
-    }
-    if !cholesky_dense(kk, r) {
-        // the task has no room left in the null space: C stays, and the
-        // last task's E G C is that of C
-        if let Some((ol, rl)) = shape.next_last {
-            for a in 0..rl {
-                let qrow = &mut qm[a * rt..a * rt + o];
-                qrow.fill(0.0);
-                let grow = &g[(ol + a) * rt..(ol + a) * rt + o];
-                for (c, &gc) in grow.iter().enumerate() {
-                    axpy(qrow, gc, &cm[c * rt..c * rt + o]);
-                }
-                qm[a * rt + o..a * rt + ol].fill(0.0);
-            }
-        }
-        return;
-    }
-    // e = x − E_i G β (β is zero past o); β += Aᵀ Λ e
-    for a in 0..r {
-        y[a] = target[a] - dot(&g[(o + a) * rt..(o + a) * rt + o], &beta[..o]);
-    }
-    cholesky_dense_solve(kk, r, y);
-    for a in 0..r {
-        axpy(&mut beta[..s], y[a], &am[a * rt..a * rt + s]);
-    }
-    if shape.last {
-        return;
-    }
-    // Dᵀ = A − T Cᵀ (C is zero past o)
-    for a in 0..r {
-        let (arow, trow) = (&am[a * rt..a * rt + s], &tm[a * rt..a * rt + o]);
-        let drow = &mut dm[a * rt..a * rt + s];
-        for c in 0..o {
-            drow[c] = arow[c] - dot(&cm[c * rt..c * rt + o], trow);
-        }
-        drow[o..s].copy_from_slice(&arow[o..s]);
-    }
-    // X = Λ A: the factor's two triangular solves, a whole row at a time
-    for a in 0..r {
-        let (done, rest) = xm.split_at_mut(a * rt);
-        let xrow = &mut rest[..s];
-        xrow.copy_from_slice(&am[a * rt..a * rt + s]);
-        for b in 0..a {
-            axpy(xrow, -kk[a * r + b], &done[b * rt..b * rt + s]);
-        }
-        let inv = 1.0 / kk[a * r + a];
-        xrow.iter_mut().for_each(|x| *x *= inv);
-    }
-    for a in (0..r).rev() {
-        let (head, tail) = xm.split_at_mut((a + 1) * rt);
-        let xrow = &mut head[a * rt..a * rt + s];
-        for b in a + 1..r {
-            axpy(
-                xrow,
-                -kk[b * r + a],
-                &tail[(b - a - 1) * rt..(b - a - 1) * rt + s],
-            );
-        }
-        let inv = 1.0 / kk[a * r + a];
-        xrow.iter_mut().for_each(|x| *x *= inv);
-    }
-    if let Some((ol, rl)) = shape.next_last {
-        // the last task's E G C_i = E G C_{i−1} + (E G D) X, over the first
-        // s columns (the last task's o; its rows start right after)
-        for a in 0..rl {
-            let gl = &g[(ol + a) * rt..(ol + a) * rt + s];
-            let qrow = &mut qm[a * rt..a * rt + s];
-            qrow.fill(0.0);
-            for (c, &gc) in gl[..o].iter().enumerate() {
-                axpy(&mut qrow[..o], gc, &cm[c * rt..c * rt + o]);
-            }
-            for b in 0..r {
-                let gd = dot(gl, &dm[b * rt..b * rt + s]);
-                axpy(qrow, gd, &xm[b * rt..b * rt + s]);
-            }
-            qm[a * rt + s..a * rt + ol].fill(0.0);
-        }
-        return;
-    }
-    // C += D X
-    for c in 0..s {
-        let crow = &mut cm[c * rt..c * rt + s];
-        for a in 0..r {
-            axpy(crow, dm[a * rt + c], &xm[a * rt..a * rt + s]);
-        }
-    }
 }
 
 /// The dense recursion of the module docs (the reference for the task-space
