@@ -242,5 +242,8 @@ fn bench_side_by_side_reports_both_layers_and_the_ratio() {
         .args(["bench", "--robots", "2", "--side-by-side"])
         .output()
         .unwrap();
-    assert!(!out.status.success(), "--side-by-side without a whole-body layer");
+    assert!(
+        !out.status.success(),
+        "--side-by-side without a whole-body layer"
+    );
 }
