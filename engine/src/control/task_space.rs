@@ -37,6 +37,10 @@ struct DofTree {
     /// Ancestors of coordinate `i`: `anc[start[i]..start[i + 1]]`, nearest first.
     anc: Vec<usize>,
     start: Vec<usize>,
+    /// Descendants of coordinate `i`: `desc[dstart[i]..dstart[i + 1]]`, in
+    /// increasing order.
+    desc: Vec<usize>,
+    dstart: Vec<usize>,
 }
 
 impl DofTree {
@@ -68,7 +72,28 @@ impl DofTree {
             }
             start.push(anc.len());
         }
-        DofTree { anc, start }
+        let mut desc = Vec::new();
+        let mut dstart = vec![0];
+        for i in 0..model.nv {
+            for k in i + 1..model.nv {
+                if anc[start[k]..start[k + 1]].contains(&i) {
+                    desc.push(k);
+                }
+            }
+            dstart.push(desc.len());
+        }
+        DofTree {
+            anc,
+            start,
+            desc,
+            dstart,
+        }
+    }
+
+    /// Descendants of coordinate `i`, in increasing order.
+    #[inline]
+    fn descendants(&self, i: usize) -> &[usize] {
+        &self.desc[self.dstart[i]..self.dstart[i + 1]]
     }
 
     /// Ancestors of coordinate `i`, nearest first.
@@ -158,6 +183,7 @@ impl TaskSpace {
         let n = self.nv;
         let h = &mut self.l;
         h.copy_from_slice(m);
+        let lk = &mut self.x;
         for k in (0..n).rev() {
             let d = h[k * n + k];
             if d <= 0.0 || !d.is_finite() {
@@ -165,16 +191,23 @@ impl TaskSpace {
             }
             let d = d.sqrt();
             h[k * n + k] = d;
-            self.inv_diag[k] = 1.0 / d;
+            let inv = 1.0 / d;
+            self.inv_diag[k] = inv;
+            // row k of L at k's ancestors, then the ancestors' rows less
+            // its outer product (the ancestors of ancestor anc[p] are anc[p..])
             let anc = self.tree.ancestors(k);
-            for &i in anc {
-                h[k * n + i] /= d;
+            let na = anc.len();
+            let rowk = &mut h[k * n..(k + 1) * n];
+            for (l, &i) in lk[..na].iter_mut().zip(anc) {
+                *l = rowk[i] * inv;
+                rowk[i] = *l;
             }
-            // the ancestors of ancestor i are the rest of k's list
-            for (p, &i) in anc.iter().enumerate() {
-                let lki = h[k * n + i];
-                for &j in &anc[p..] {
-                    h[i * n + j] -= lki * h[k * n + j];
+            for p in 0..na {
+                let i = anc[p];
+                let lki = lk[p];
+                let rowi = &mut h[i * n..(i + 1) * n];
+                for (&j, &lkj) in anc[p..].iter().zip(&lk[p..na]) {
+                    rowi[j] -= lki * lkj;
                 }
             }
         }
@@ -261,23 +294,44 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     (acc[0] + acc[2]) + (acc[1] + acc[3])
 }
 
-/// `out += Σ_k coef[k] · row k of rows`, four rows at a time (one pass
-/// over `out` per four rows).
+/// `out += Σ_k coef[k] · row k of rows`.
 #[inline(always)]
 fn add_rows<const N: usize>(out: &mut [f64; N], coef: &[f64], rows: &[f64]) {
+    add_rows_by(out, coef, |k| row::<N>(rows, k));
+}
+
+/// `out += Σ_k coef[k] · row(k)`, four rows at a time (one pass over `out`
+/// per four rows, then one for the last one to three).
+#[inline(always)]
+fn add_rows_by<'a, const N: usize>(
+    out: &mut [f64; N],
+    coef: &[f64],
+    row: impl Fn(usize) -> &'a [f64; N],
+) {
     let mut quads = coef.chunks_exact(4);
     let mut k = 0;
     for c in quads.by_ref() {
-        let (r0, r1) = (row::<N>(rows, k), row::<N>(rows, k + 1));
-        let (r2, r3) = (row::<N>(rows, k + 2), row::<N>(rows, k + 3));
+        let (r0, r1, r2, r3) = (row(k), row(k + 1), row(k + 2), row(k + 3));
         for j in 0..N {
             out[j] += (c[0] * r0[j] + c[1] * r1[j]) + (c[2] * r2[j] + c[3] * r3[j]);
         }
         k += 4;
     }
-    for &c in quads.remainder() {
-        axpy(out, c, row::<N>(rows, k));
-        k += 1;
+    match *quads.remainder() {
+        [c0, c1, c2] => {
+            let (r0, r1, r2) = (row(k), row(k + 1), row(k + 2));
+            for j in 0..N {
+                out[j] += (c0 * r0[j] + c1 * r1[j]) + c2 * r2[j];
+            }
+        }
+        [c0, c1] => {
+            let (r0, r1) = (row(k), row(k + 1));
+            for j in 0..N {
+                out[j] += c0 * r0[j] + c1 * r1[j];
+            }
+        }
+        [c0] => axpy(out, c0, row(k)),
+        _ => {}
     }
 }
 
@@ -293,35 +347,43 @@ fn solve_n<const N: usize>(
     let nv = t.nv;
     let rt = tasks.iter().map(|&(o, r)| o + r).max().unwrap_or(0);
     let wd = &mut t.wd[..nv * N];
-    // W = L⁻ᵀ Jᵀ by coordinates: Jᵀ, then leaves to root, all rows at once
-    for i in 0..nv {
-        let w = row_mut::<N>(wd, i);
-        w.fill(0.0);
-        for (a, x) in w[..rt].iter_mut().enumerate() {
+    let mut coef = [0.0; LARGE];
+    let mut idx = [0usize; LARGE];
+    // W = L⁻ᵀ Jᵀ by coordinates, leaves to root, all task rows at once:
+    // W_i = (Jᵀ_i − Σ_{k below i} L_ki W_k) / L_ii
+    for i in (0..nv).rev() {
+        let (head, tail) = wd.split_at_mut((i + 1) * N);
+        let wi = row_mut::<N>(head, i);
+        wi.fill(0.0);
+        for (a, x) in wi[..rt].iter_mut().enumerate() {
             *x = rows[a * nv + i];
         }
-    }
-    for i in (0..nv).rev() {
-        let (head, tail) = wd.split_at_mut(i * N);
-        let wi = row_mut::<N>(tail, 0);
+        let desc = t.tree.descendants(i);
+        for (c, &k) in coef.iter_mut().zip(desc) {
+            *c = -t.l[k * nv + i];
+        }
+        add_rows_by(wi, &coef[..desc.len()], |p| row::<N>(tail, desc[p] - i - 1));
         let d = t.inv_diag[i];
         wi.iter_mut().for_each(|x| *x *= d);
-        let li = &t.l[i * nv..(i + 1) * nv];
-        for &j in t.tree.ancestors(i) {
-            axpy(row_mut::<N>(head, j), -li[j], wi);
-        }
     }
-    // G = Σ_i W_i W_iᵀ over the task rows each coordinate moves
+    // G = W Wᵀ: row a sums the coordinates' rows that task row a moves
     let g = &mut t.g[..N * N];
-    g.fill(0.0);
-    for i in 0..nv {
-        let wi = row::<N>(wd, i);
-        for a in 0..rt {
-            let c = wi[a];
+    for a in 0..N {
+        let ga = row_mut::<N>(g, a);
+        ga.fill(0.0);
+        if a >= rt {
+            continue;
+        }
+        let mut m = 0;
+        for i in 0..nv {
+            let c = wd[i * N + a];
             if c != 0.0 {
-                axpy(row_mut::<N>(g, a), c, wi);
+                coef[m] = c;
+                idx[m] = i;
+                m += 1;
             }
         }
+        add_rows_by(ga, &coef[..m], |p| row::<N>(wd, idx[p]));
     }
     // the tasks with rows, in order; the one before the last computes what
     // the last needs of C instead of C itself

@@ -547,23 +547,29 @@ impl WholeBody {
             }
             *ri = s;
         }
-        // M_b Z (6 × 6), factored by LU
-        let mut mbz = nalgebra::Matrix6::<f64>::zeros();
-        for i in 0..6 {
-            for k in 0..6 {
-                let mut s = 0.0;
-                for c in 0..nv {
-                    s += self.m[i * nv + c] * self.z[c * 6 + k];
+        // M_b Z (6 × 6): each row a sum of Z's rows
+        let mut mbz = [[0.0; 6]; 6];
+        for (i, acc) in mbz.iter_mut().enumerate() {
+            for (c, &mic) in self.m[i * nv..(i + 1) * nv].iter().enumerate() {
+                let zc = &self.z[c * 6..c * 6 + 6];
+                for k in 0..6 {
+                    acc[k] += mic * zc[k];
                 }
-                mbz[(i, k)] = s;
             }
         }
-        let lu = mbz.lu();
-        // d0 = (M_b Z)⁻¹ r; A = (M_b Z)⁻¹ J_cbᵀ (6 × n)
-        let Some(d0v) = lu.solve(&nalgebra::Vector6::from_column_slice(&r)) else {
+        // d0 = (M_b Z)⁻¹ r; A = (M_b Z)⁻¹ J_cbᵀ (6 × n): one elimination
+        // for the n + 1 right-hand sides
+        let mut rhs = [[0.0; 6]; MAX_VARS + 1];
+        rhs[0] = r;
+        for x in 0..n {
+            for i in 0..6 {
+                rhs[1 + x][i] = self.rows[x * nv + i];
+            }
+        }
+        if !solve6(mbz, &mut rhs[..n + 1]) {
             return;
-        };
-        let d0: [f64; 6] = d0v.into();
+        }
+        let d0 = rhs[0];
         if n == 0 {
             // in flight the base's rows decide its acceleration alone
             out.base_change = d0;
@@ -571,16 +577,8 @@ impl WholeBody {
         }
         let mut amat = [[0.0; MAX_VARS]; 6];
         for x in 0..n {
-            let (c, axis) = (x / 3, x % 3);
-            let mut colv = nalgebra::Vector6::<f64>::zeros();
             for i in 0..6 {
-                colv[i] = self.rows[(3 * c + axis) * nv + i];
-            }
-            let Some(sol) = lu.solve(&colv) else {
-                return;
-            };
-            for i in 0..6 {
-                amat[i][x] = sol[i];
+                amat[i][x] = rhs[1 + x][i];
             }
         }
         let p = &self.params;
@@ -646,6 +644,51 @@ impl WholeBody {
         }
         out.qp_solved = true;
     }
+}
+
+/// Solves `a x = b` for each `b` in `rhs` (in place) by Gaussian elimination
+/// with partial pivoting; `false` when a pivot is zero (`a` singular).
+fn solve6(mut a: [[f64; 6]; 6], rhs: &mut [[f64; 6]]) -> bool {
+    for p in 0..6 {
+        let mut piv = p;
+        for i in p + 1..6 {
+            if a[i][p].abs() > a[piv][p].abs() {
+                piv = i;
+            }
+        }
+        if a[piv][p] == 0.0 {
+            return false;
+        }
+        if piv != p {
+            a.swap(piv, p);
+            for b in rhs.iter_mut() {
+                b.swap(piv, p);
+            }
+        }
+        let inv = 1.0 / a[p][p];
+        for i in p + 1..6 {
+            let f = a[i][p] * inv;
+            if f == 0.0 {
+                continue;
+            }
+            for k in p + 1..6 {
+                a[i][k] -= f * a[p][k];
+            }
+            for b in rhs.iter_mut() {
+                b[i] -= f * b[p];
+            }
+        }
+    }
+    for b in rhs.iter_mut() {
+        for i in (0..6).rev() {
+            let mut s = b[i];
+            for k in i + 1..6 {
+                s -= a[i][k] * b[k];
+            }
+            b[i] = s / a[i][i];
+        }
+    }
+    true
 }
 
 /// The classical acceleration (m/s², world) of the point `point_m` fixed on
