@@ -203,3 +203,47 @@ fn bench_whole_body_chooses_the_torque_layer() {
         );
     }
 }
+
+/// `--side-by-side` times the whole-body herd and the `τ = Jᵀ f` herd in
+/// one run and reports both and their ratio (issue 27's cost target); it
+/// needs a whole-body layer to compare.
+#[test]
+fn bench_side_by_side_reports_both_layers_and_the_ratio() {
+    let (dir, _json, out) = bench(
+        "bench-side",
+        &[
+            "--robots",
+            "2",
+            "--threads",
+            "1",
+            "--steps",
+            "10",
+            "--repeats",
+            "3",
+            "--warmup",
+            "10",
+            "--whole-body",
+            "--side-by-side",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("side by side"), "{stdout}");
+    let last: serde_json::Value =
+        serde_json::from_str(stdout.lines().last().unwrap()).expect("last line is JSON");
+    let wb = last["robot_steps_per_s"].as_f64().unwrap();
+    let jt = last["jt_robot_steps_per_s"].as_f64().unwrap();
+    let ratio = last["whole_body_over_jt"].as_f64().unwrap();
+    assert!(wb > 0.0 && jt > 0.0, "{last}");
+    assert!((ratio - wb / jt).abs() < 1e-12, "{last}");
+    assert!(last["whole_body_over_jt_pair_median"].as_f64().unwrap() > 0.0);
+    std::fs::remove_dir_all(dir).ok();
+
+    let out = Command::new(env!("CARGO_BIN_EXE_quadsim"))
+        .args(["bench", "--robots", "2", "--side-by-side"])
+        .output()
+        .unwrap();
+    assert!(
+        !out.status.success(),
+        "--side-by-side without a whole-body layer"
+    );
+}

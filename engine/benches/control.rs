@@ -14,7 +14,9 @@
 //!
 //! `wbc/trot_pair`: one solve of the whole-body layer (`control::wbc`) on
 //! quad16 in diagonal support (two contacts, two swing feet, four ankle
-//! postures), kinematics already computed. Run with
+//! postures), kinematics already computed; `wbc/trot_pair/dense_reference`
+//! the same solve with the dense null-space recursion it replaced
+//! ([`WholeBody::solve_reference`]). Run with
 //! `cargo bench -p quadsim-engine --bench control`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -174,7 +176,8 @@ fn bench_wbc(c: &mut Criterion) {
     };
     let mut wbc = WholeBody::new(&model, WbcParams::default());
     let mut tau = vec![0.0; model.nv - 6];
-    c.bench_function("wbc/trot_pair", |b| {
+    let mut group = c.benchmark_group("wbc");
+    group.bench_function("trot_pair", |b| {
         b.iter(|| {
             wbc.solve(
                 &model,
@@ -190,6 +193,23 @@ fn bench_wbc(c: &mut Criterion) {
             black_box(&tau);
         })
     });
+    group.bench_function("trot_pair/dense_reference", |b| {
+        b.iter(|| {
+            wbc.solve_reference(
+                &model,
+                &mut data,
+                black_box(&v),
+                &contacts,
+                &body,
+                &points,
+                &joints,
+                &mut tau,
+            )
+            .unwrap();
+            black_box(&tau);
+        })
+    });
+    group.finish();
 }
 
 criterion_group!(benches, bench);

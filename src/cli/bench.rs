@@ -73,6 +73,13 @@ pub struct BenchArgs {
     /// also gives the median time of one MPC solve on a trot's problem.
     #[arg(long, value_enum, default_value_t = BenchPlanner::Vmc)]
     pub planner: BenchPlanner,
+    /// With `--whole-body` or `--planner mpc` (quad16): also time the same
+    /// herd under Study A's `τ = Jᵀ f` in the same run, its blocks
+    /// alternating with the whole-body herd's (so that both see the same
+    /// machine load), and report both and the whole-body herd's throughput
+    /// as a fraction of the `τ = Jᵀ f` herd's (issue 27's cost target).
+    #[arg(long)]
+    pub side_by_side: bool,
     /// Write the figures as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -236,64 +243,163 @@ impl BenchPoint {
     }
 }
 
+/// One configuration's world, built, warmed up and ready to time.
+struct Prepared {
+    world: crate::world::World,
+    robots: usize,
+    threads: usize,
+    bytes_per_robot: Option<f64>,
+}
+
+impl Prepared {
+    /// Builds and warms up `robots` robots on `threads` threads, the
+    /// controller layer chosen by `whole_body` and `planner`.
+    fn new(
+        a: &BenchArgs,
+        robots: usize,
+        threads: usize,
+        whole_body: bool,
+        planner: BenchPlanner,
+    ) -> Result<Prepared, CliError> {
+        let build = |n: usize| {
+            let src = bench_scenario_with(&a.model, n, a.sensing, whole_body, planner)?;
+            let scn =
+                parse_scenario(Path::new("bench.toml"), src).map_err(|e| bad(e.to_string()))?;
+            build_world(
+                &scn,
+                Overrides {
+                    threads,
+                    ..Default::default()
+                },
+            )
+            .map_err(|e| bad(e.to_string()))
+        };
+        let before = crate::mem::live_bytes();
+        let empty = build(0)?;
+        let base = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
+        drop(empty);
+        let before = crate::mem::live_bytes();
+        let mut w = build(robots)?;
+        w.sim
+            .world
+            .insert_resource(quadsim_components::LaneBatching::from(a.lanes));
+        w.sim.world.insert_resource(match a.block_robots {
+            0 => quadsim_components::StageLayout::StageMajor,
+            n => quadsim_components::StageLayout::RobotBlocks { robots: n },
+        });
+        w.sim.run(a.warmup.max(1));
+        let with = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
+        let bytes_per_robot = match (with, base) {
+            (Some(w), Some(b)) if robots > 0 => Some((w - b) as f64 / robots as f64),
+            _ => None,
+        };
+        Ok(Prepared {
+            world: w,
+            robots,
+            threads,
+            bytes_per_robot,
+        })
+    }
+
+    /// Wall time (s) of one block of `steps` steps.
+    fn time_block(&mut self, steps: u64) -> f64 {
+        let t = Instant::now();
+        self.world.sim.run(steps);
+        t.elapsed().as_secs_f64()
+    }
+
+    /// Warns on stderr when robots fell during the benchmark.
+    fn warn_falls(&self, what: &str) {
+        let w = &self.world;
+        let fell = w
+            .robots
+            .iter()
+            .filter(|(_, e)| {
+                w.sim
+                    .robot(*e)
+                    .is_some_and(|r| r.run.metrics.summary().fell)
+            })
+            .count();
+        if fell > 0 {
+            eprintln!(
+                "warning: {fell} of {} robots fell during the benchmark{what}",
+                self.robots
+            );
+        }
+    }
+
+    fn point(&self, blocks: &mut [f64], steps: u64) -> BenchPoint {
+        BenchPoint {
+            robots: self.robots,
+            threads: self.threads,
+            block_wall_s: median(blocks),
+            steps,
+            bytes_per_robot: self.bytes_per_robot,
+        }
+    }
+}
+
+/// The median of `x` (sorted in place; the upper one of an even count).
+fn median(x: &mut [f64]) -> f64 {
+    x.sort_by(f64::total_cmp);
+    x[x.len() / 2]
+}
+
 /// Builds, warms up and times one configuration.
 pub fn measure(a: &BenchArgs, robots: usize, threads: usize) -> Result<BenchPoint, CliError> {
-    let build = |n: usize| {
-        let src = bench_scenario_with(&a.model, n, a.sensing, a.whole_body, a.planner)?;
-        let scn = parse_scenario(Path::new("bench.toml"), src).map_err(|e| bad(e.to_string()))?;
-        build_world(
-            &scn,
-            Overrides {
-                threads,
-                ..Default::default()
-            },
-        )
-        .map_err(|e| bad(e.to_string()))
-    };
-    let before = crate::mem::live_bytes();
-    let empty = build(0)?;
-    let base = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
-    drop(empty);
-    let before = crate::mem::live_bytes();
-    let mut w = build(robots)?;
-    w.sim
-        .world
-        .insert_resource(quadsim_components::LaneBatching::from(a.lanes));
-    w.sim.world.insert_resource(match a.block_robots {
-        0 => quadsim_components::StageLayout::StageMajor,
-        n => quadsim_components::StageLayout::RobotBlocks { robots: n },
-    });
-    w.sim.run(a.warmup.max(1));
-    let with = crate::mem::live_bytes().zip(before).map(|(a, b)| a - b);
-    let bytes_per_robot = match (with, base) {
-        (Some(w), Some(b)) if robots > 0 => Some((w - b) as f64 / robots as f64),
-        _ => None,
-    };
-    let mut blocks = Vec::with_capacity(a.repeats);
-    for _ in 0..a.repeats.max(1) {
-        let t = Instant::now();
-        w.sim.run(a.steps);
-        blocks.push(t.elapsed().as_secs_f64());
+    let mut p = Prepared::new(a, robots, threads, a.whole_body, a.planner)?;
+    let mut blocks: Vec<f64> = (0..a.repeats.max(1))
+        .map(|_| p.time_block(a.steps))
+        .collect();
+    p.warn_falls("");
+    Ok(p.point(&mut blocks, a.steps))
+}
+
+/// A configuration under the whole-body layer and the same herd under
+/// Study A's `τ = Jᵀ f`, timed side by side (`quadsim bench --side-by-side`).
+#[derive(Debug, Clone)]
+pub struct SideBySide {
+    /// The whole-body herd (with the chosen planner).
+    pub whole_body: BenchPoint,
+    /// The `τ = Jᵀ f` herd.
+    pub jt: BenchPoint,
+    /// The median over the pairs of blocks of the whole-body herd's
+    /// throughput over the `τ = Jᵀ f` herd's in the block just before.
+    pub pair_ratio_median: f64,
+}
+
+impl SideBySide {
+    /// The whole-body herd's throughput as a fraction of the `τ = Jᵀ f`
+    /// herd's (the medians' ratio).
+    pub fn ratio(&self) -> f64 {
+        self.whole_body.robot_steps_per_s() / self.jt.robot_steps_per_s()
     }
-    blocks.sort_by(f64::total_cmp);
-    let fell = w
-        .robots
-        .iter()
-        .filter(|(_, e)| {
-            w.sim
-                .robot(*e)
-                .is_some_and(|r| r.run.metrics.summary().fell)
-        })
-        .count();
-    if fell > 0 {
-        eprintln!("warning: {fell} of {robots} robots fell during the benchmark");
+}
+
+/// Builds both herds, warms them up, then times `--repeats` pairs of
+/// blocks, a `τ = Jᵀ f` block then a whole-body block.
+pub fn measure_side_by_side(
+    a: &BenchArgs,
+    robots: usize,
+    threads: usize,
+) -> Result<SideBySide, CliError> {
+    let mut wb = Prepared::new(a, robots, threads, true, a.planner)?;
+    let mut jt = Prepared::new(a, robots, threads, false, BenchPlanner::Vmc)?;
+    let n = a.repeats.max(1);
+    let (mut tj, mut tw, mut pairs) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..n {
+        let j = jt.time_block(a.steps);
+        let w = wb.time_block(a.steps);
+        tj.push(j);
+        tw.push(w);
+        pairs.push(j / w);
     }
-    Ok(BenchPoint {
-        robots,
-        threads,
-        block_wall_s: blocks[blocks.len() / 2],
-        steps: a.steps,
-        bytes_per_robot,
+    jt.warn_falls(" (τ = Jᵀ f)");
+    wb.warn_falls(" (whole body)");
+    Ok(SideBySide {
+        whole_body: wb.point(&mut tw, a.steps),
+        jt: jt.point(&mut tj, a.steps),
+        pair_ratio_median: median(&mut pairs),
     })
 }
 
@@ -314,13 +420,26 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
         return Err(bad("--steps and every --robots count must be at least 1"));
     }
     herd_scenario(&a.model, 1)?;
+    let side = a.side_by_side;
+    if side && !(a.model == "quad16" && (a.whole_body || a.planner == BenchPlanner::Mpc)) {
+        return Err(bad(
+            "--side-by-side compares quad16's whole-body layer with τ = Jᵀ f: give --whole-body or --planner mpc",
+        ));
+    }
     let total = (a.robots.len() * a.threads.len()) as u64;
     let bar = indicatif::ProgressBar::new(total);
     let mut points = Vec::new();
+    let mut pairs = Vec::new();
     for &n in &a.robots {
         for &t in &a.threads {
             bar.set_message(format!("{n} robots, {t} threads"));
-            points.push(measure(&a, n, t)?);
+            if side {
+                let sbs = measure_side_by_side(&a, n, t)?;
+                points.push(sbs.whole_body.clone());
+                pairs.push(sbs);
+            } else {
+                points.push(measure(&a, n, t)?);
+            }
             bar.inc(1);
         }
     }
@@ -375,7 +494,7 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
             p.bytes_per_robot
                 .map_or("-".into(), |b| format!("{:.1}", b / 1024.0)),
         );
-        rows.push(json!({
+        let mut row = json!({
             "robots": p.robots,
             "threads": p.threads,
             "robot_steps_per_s": p.robot_steps_per_s(),
@@ -384,7 +503,36 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
             "real_time_factor": rt,
             "speedup_vs_1_thread": one,
             "bytes_per_robot": p.bytes_per_robot,
-        }));
+        });
+        if let Some(sbs) = pairs
+            .iter()
+            .find(|s| s.whole_body.robots == p.robots && s.whole_body.threads == p.threads)
+        {
+            row["jt_robot_steps_per_s"] = json!(sbs.jt.robot_steps_per_s());
+            row["whole_body_over_jt"] = json!(sbs.ratio());
+            row["whole_body_over_jt_pair_median"] = json!(sbs.pair_ratio_median);
+        }
+        rows.push(row);
+    }
+    if side {
+        println!(
+            "side by side in this run, blocks alternating (τ = Jᵀ f, then the whole-body layer):"
+        );
+        println!(
+            "{:>7} {:>7} {:>18} {:>18} {:>10} {:>16}",
+            "robots", "threads", "τ = Jᵀ f steps/s", "whole-body steps/s", "ratio", "pairs' median"
+        );
+        for s in &pairs {
+            println!(
+                "{:>7} {:>7} {:>18.0} {:>18.0} {:>9.1}% {:>15.1}%",
+                s.jt.robots,
+                s.jt.threads,
+                s.jt.robot_steps_per_s(),
+                s.whole_body.robot_steps_per_s(),
+                100.0 * s.ratio(),
+                100.0 * s.pair_ratio_median,
+            );
+        }
     }
     if let Some(path) = &a.json {
         let v: Value = json!({

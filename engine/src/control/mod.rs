@@ -10,6 +10,7 @@ pub mod joint_pd;
 pub mod mpc;
 pub mod prescribed;
 pub mod profile;
+mod task_space;
 pub mod vmc;
 pub mod walker;
 pub mod wbc;

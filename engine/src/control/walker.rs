@@ -475,6 +475,11 @@ pub struct Walker {
     ground_filtered: Option<(GroundPlane, DVec2)>,
     /// The whole-body layer's workspace (when [`WalkerParams::whole_body`]).
     wbc: Option<Box<WholeBody>>,
+    /// Whether the environment variable `WBDEBUG` was set when the walker
+    /// was made: each whole-body solve is then printed to stderr (read
+    /// once: reading the environment takes a lock, on every tick it showed
+    /// in profiles).
+    wbc_debug: bool,
     /// The MPC planner and its problem (when [`Planner::Mpc`]).
     mpc: Option<Box<MpcPlan>>,
 }
@@ -596,6 +601,7 @@ impl Walker {
             wbc: params
                 .whole_body
                 .then(|| Box::new(WholeBody::new(model, params.wbc))),
+            wbc_debug: params.whole_body && std::env::var_os("WBDEBUG").is_some(),
             mpc: (params.planner == Planner::Mpc).then(|| {
                 Box::new(MpcPlan {
                     mpc: Mpc::new(params.mpc),
@@ -1526,7 +1532,7 @@ impl Walker {
             tau_joints,
         ) {
             Ok(out) => {
-                if std::env::var("WBDEBUG").is_ok() {
+                if self.wbc_debug {
                     eprintln!(
                         "nc {nc} np {np} qp {} db {:?} f {:?} tau {:?}",
                         out.qp_solved,

@@ -33,6 +33,7 @@
 
 use crate::control::active_set::{ActiveSet, DenseQp, MAX_VARS};
 use crate::control::force_qp::{MAX_FEET, tangent_basis};
+use crate::control::task_space::TaskSpace;
 use crate::data::Data;
 use crate::jacobian::point_jacobian;
 use crate::linalg::{cholesky_dense, cholesky_dense_solve};
@@ -156,7 +157,31 @@ pub enum WbcError {
 }
 
 /// The whole-body layer's workspace: every buffer a solve needs, sized for the
-/// model once (the solve allocates nothing).
+/// model once (the solve allocates nothing; [`WholeBody::solve_reference`]
+/// allocates its dense buffers on its first call).
+///
+/// # How the hierarchy is computed
+/// The tasks' rows are stacked into one `J` (`R × nv`: stance feet, torso,
+/// swing feet, joint postures; `R` = 22 for quad16) with their targets `x`.
+/// Every quantity of the module docs' recursion lies in the span of `J`'s
+/// rows mapped by `M⁻¹`: by induction, `N_i = I − M⁻¹ Jᵀ C_i J` and `q̈ =
+/// M⁻¹ Jᵀ β`, where with `G = J M⁻¹ Jᵀ` (`R × R`) and `E_i` the rows of task
+/// `i`,
+///
+/// - `J_i N_{i−1} = A_i J` with `A_i = E_i (I − G C_{i−1})`;
+/// - `Λ_i⁻¹ = A_i G A_iᵀ + λ I`, `e_i = x_i − E_i G β`;
+/// - `β ← β + A_iᵀ Λ_i e_i`, `C_i = C_{i−1} + (I − C_{i−1} G) A_iᵀ Λ_i A_i`.
+///
+/// This is the same algebra (damping included), so the same answer up to
+/// round-off, in `R`-dimensional task space instead of with dense `nv × nv`
+/// projectors and `M⁻¹`. `G` comes from the floating-base tree's sparse
+/// factor `M = Lᵀ L` (Featherstone 2008, §6.5, "LTL"; `L` has the tree's
+/// sparsity, no fill-in): `G = Wᵀ W` with `W = L⁻ᵀ Jᵀ`, whose column for a
+/// foot is non-zero only on the base and that foot's leg, so entries
+/// between two legs are six-term sums. `C_i` is zero past the rows of tasks
+/// `1..i`, so each task works on the leading block. At the end, `q̈ = L⁻¹ (W
+/// β)`. [`WholeBody::solve_reference`] keeps the dense recursion as the
+/// reference the tests compare with.
 #[derive(Clone, Debug)]
 pub struct WholeBody {
     /// Parameters.
@@ -165,33 +190,30 @@ pub struct WholeBody {
     zeros: Vec<f64>,
     h: Vec<f64>,
     m: Vec<f64>,
-    l: Vec<f64>,
-    minv: Vec<f64>,
-    null: Vec<f64>,
     qdd: Vec<f64>,
-    /// Task rows (≤ 12 × nv), their bias and target.
-    jt: Vec<f64>,
-    jn: Vec<f64>,
+    /// The stacked task rows `J` (`R × nv`) and their targets (bias subtracted).
+    rows: Vec<f64>,
     target: Vec<f64>,
-    /// Contact Jacobian (3 nc × nv).
-    jc: Vec<f64>,
-    /// Swing points' Jacobian (3 np × nv).
-    jp: Vec<f64>,
+    /// First row and row count of each task, in order of priority.
+    tasks: [(usize, usize); 4],
+    /// First row of the swing feet's task.
+    swing_row: usize,
+    /// The hierarchy in task space.
+    ts: TaskSpace,
     /// `Z` (nv × 6): how q̈ changes with the base's acceleration change `δ_b`
     /// when every foot keeps its task (`J Z = 0` on each leg).
     z: Vec<f64>,
-    // scratch
-    a: Vec<f64>,
-    b: Vec<f64>,
-    c: Vec<f64>,
-    lam: Vec<f64>,
-    col: Vec<f64>,
     qp: Box<DenseQp>,
     solver: Box<ActiveSet>,
+    /// The dense reference's buffers ([`WholeBody::solve_reference`]).
+    dense: Option<Box<DenseHierarchy>>,
 }
 
 /// Most rows of one task (four feet × 3).
 const MAX_ROWS: usize = 3 * MAX_FEET;
+
+/// Most rows of all tasks: stance and swing feet, the torso, joint postures.
+const MAX_TASK_ROWS: usize = 2 * MAX_ROWS + 6 + MAX_ROWS;
 
 impl WholeBody {
     /// A workspace for `model`.
@@ -203,23 +225,16 @@ impl WholeBody {
             zeros: vec![0.0; nv],
             h: vec![0.0; nv],
             m: vec![0.0; nv * nv],
-            l: vec![0.0; nv * nv],
-            minv: vec![0.0; nv * nv],
-            null: vec![0.0; nv * nv],
             qdd: vec![0.0; nv],
-            jt: vec![0.0; MAX_ROWS * nv],
-            jn: vec![0.0; MAX_ROWS * nv],
-            target: vec![0.0; MAX_ROWS],
-            jc: vec![0.0; MAX_ROWS * nv],
-            jp: vec![0.0; MAX_ROWS * nv],
+            rows: vec![0.0; MAX_TASK_ROWS * nv],
+            target: vec![0.0; MAX_TASK_ROWS],
+            tasks: [(0, 0); 4],
+            swing_row: 0,
+            ts: TaskSpace::new(model),
             z: vec![0.0; nv * 6],
-            a: vec![0.0; MAX_ROWS * nv],
-            b: vec![0.0; nv * MAX_ROWS],
-            c: vec![0.0; nv * nv],
-            lam: vec![0.0; MAX_ROWS * MAX_ROWS],
-            col: vec![0.0; nv.max(MAX_ROWS)],
             qp: Box::default(),
             solver: Box::new(ActiveSet::default()),
+            dense: None,
         }
     }
 
@@ -243,95 +258,146 @@ impl WholeBody {
         joints: &[JointTask],
         tau_joints: &mut [f64],
     ) -> Result<WbcOutput, WbcError> {
+        self.solve_with(
+            model, data, v, contacts, body, points, joints, tau_joints, false,
+        )
+    }
+
+    /// [`WholeBody::solve`] with the task hierarchy computed as the module
+    /// docs write it, with dense `nv × nv` null-space projectors and `M⁻¹`
+    /// (the algorithm the task-space form replaced, kept as the reference
+    /// its tests compare with). Allocates its buffers on the first call.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_reference(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        v: &[f64],
+        contacts: &[ContactTask],
+        body: &BodyTask,
+        points: &[PointTask],
+        joints: &[JointTask],
+        tau_joints: &mut [f64],
+    ) -> Result<WbcOutput, WbcError> {
+        self.solve_with(
+            model, data, v, contacts, body, points, joints, tau_joints, true,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn solve_with(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        v: &[f64],
+        contacts: &[ContactTask],
+        body: &BodyTask,
+        points: &[PointTask],
+        joints: &[JointTask],
+        tau_joints: &mut [f64],
+        dense: bool,
+    ) -> Result<WbcOutput, WbcError> {
         let nv = self.nv;
         let nb = model.base_nv();
         let nc = contacts.len();
-        if nc > MAX_FEET {
+        if nc > MAX_FEET || points.len() > MAX_FEET {
             return Err(WbcError::TooManyContacts);
         }
         // h(q, v) and the bodies' bias accelerations (q̈ = 0): one RNEA pass.
         crate::dispatch::rnea_from_kinematics(model, data, v, &self.zeros, false);
         self.h.copy_from_slice(&data.tau);
-        // M(q), its factor and inverse
+        // M(q)
         {
             let mm = crate::crba::crba_from_kinematics(model, data);
             self.m.copy_from_slice(&mm);
         }
-        self.l.copy_from_slice(&self.m);
-        if !cholesky_dense(&mut self.l, nv) {
-            return Err(WbcError::MassMatrix);
-        }
-        for i in 0..nv {
-            self.col.fill(0.0);
-            self.col[i] = 1.0;
-            cholesky_dense_solve(&self.l, nv, &mut self.col[..nv]);
-            for r in 0..nv {
-                self.minv[r * nv + i] = self.col[r];
-            }
-        }
-        self.qdd.fill(0.0);
-        self.null.fill(0.0);
-        for i in 0..nv {
-            self.null[i * nv + i] = 1.0;
-        }
 
+        // the tasks' rows, stacked in order of priority
         // 1. contacts: J_c q̈ = −J̇_c v − k J_c v
         let kc = self.params.contact_velocity_gain;
         for (k, c) in contacts.iter().enumerate() {
             let bias = point_bias(model, data, c.body, c.point_m);
             let vel = data.vel[c.body].point_velocity(c.point_m - data.origin);
             let j = point_jacobian(model, data, c.body, c.point_m);
-            self.jt[3 * k * nv..3 * (k + 1) * nv].copy_from_slice(j);
+            self.rows[3 * k * nv..3 * (k + 1) * nv].copy_from_slice(j);
             for r in 0..3 {
                 self.target[3 * k + r] = -bias[r] - kc * vel[r];
             }
         }
-        self.jc[..3 * nc * nv].copy_from_slice(&self.jt[..3 * nc * nv]);
-        self.task(3 * nc, false);
-
+        let mut row = 3 * nc;
+        self.tasks[0] = (0, row);
         // 2. the torso: attitude (ω̇ world = R ω̇_b, no bias) and the base
         //    origin's acceleration, one task of six rows
+        self.tasks[1] = (row, 0);
         if nb == 6 {
             let rot = data.pose[0].rot;
             let (lin, ang) = self.body_accelerations(model, data, rot, body);
             let p0 = data.pose[0].trans;
             let bias = point_bias(model, data, 0, p0);
             let j = point_jacobian(model, data, 0, p0);
-            self.jt[3 * nv..6 * nv].copy_from_slice(j);
-            self.jt[..3 * nv].fill(0.0);
+            let t = &mut self.rows[row * nv..(row + 6) * nv];
+            t[3 * nv..].copy_from_slice(j);
+            t[..3 * nv].fill(0.0);
             for r in 0..3 {
                 for k in 0..3 {
-                    self.jt[r * nv + 3 + k] = rot.col(k)[r];
+                    t[r * nv + 3 + k] = rot.col(k)[r];
                 }
-                self.target[r] = ang[r];
-                self.target[3 + r] = lin[r] - bias[r];
+                self.target[row + r] = ang[r];
+                self.target[row + 3 + r] = lin[r] - bias[r];
             }
-            let last = points.is_empty() && joints.is_empty();
-            self.task(6, last);
+            self.tasks[1] = (row, 6);
+            row += 6;
         }
         // 3. swing feet, one task
-        if points.len() > MAX_FEET {
-            return Err(WbcError::TooManyContacts);
-        }
+        self.swing_row = row;
         for (k, p) in points.iter().enumerate() {
             let bias = point_bias(model, data, p.body, p.point_m);
             let j = point_jacobian(model, data, p.body, p.point_m);
-            self.jt[3 * k * nv..3 * (k + 1) * nv].copy_from_slice(j);
+            let r0 = row + 3 * k;
+            self.rows[r0 * nv..(r0 + 3) * nv].copy_from_slice(j);
             for r in 0..3 {
-                self.target[3 * k + r] = p.acc_mps2[r] - bias[r];
+                self.target[r0 + r] = p.acc_mps2[r] - bias[r];
             }
         }
         let np = points.len();
-        self.jp[..3 * np * nv].copy_from_slice(&self.jt[..3 * np * nv]);
-        self.task(3 * np, joints.is_empty());
+        self.tasks[2] = (row, 3 * np);
+        row += 3 * np;
         // 4. joint postures, one task
         let nj = joints.len().min(MAX_ROWS);
-        self.jt[..nj * nv].fill(0.0);
+        self.rows[row * nv..(row + nj) * nv].fill(0.0);
         for (r, jtk) in joints[..nj].iter().enumerate() {
-            self.jt[r * nv + jtk.v_index] = 1.0;
-            self.target[r] = jtk.acc_radps2;
+            self.rows[(row + r) * nv + jtk.v_index] = 1.0;
+            self.target[row + r] = jtk.acc_radps2;
         }
-        self.task(nj, true);
+        self.tasks[3] = (row, nj);
+
+        // 5. the accelerations the hierarchy gives
+        if dense {
+            let d = self
+                .dense
+                .get_or_insert_with(|| Box::new(DenseHierarchy::new(nv)));
+            if !d.solve(
+                &self.m,
+                &self.rows,
+                &self.target,
+                &self.tasks,
+                self.params.damping,
+                &mut self.qdd,
+            ) {
+                return Err(WbcError::MassMatrix);
+            }
+        } else {
+            if !self.ts.factor(&self.m) {
+                return Err(WbcError::MassMatrix);
+            }
+            self.ts.solve(
+                &self.rows,
+                &self.target,
+                &self.tasks,
+                self.params.damping,
+                &mut self.qdd,
+            );
+        }
 
         // 6. the QP over δf (δ_b eliminated through the base's rows)
         let mut out = WbcOutput {
@@ -355,6 +421,7 @@ impl WholeBody {
         }
 
         // 7. τ = M q̈ + h − J_cᵀ f (joint rows)
+        let jc = &self.rows[..3 * nc * nv];
         for (t, i) in tau_joints.iter_mut().zip(nb..nv) {
             let mut s = self.h[i];
             let row = &self.m[i * nv..(i + 1) * nv];
@@ -363,9 +430,7 @@ impl WholeBody {
             }
             for (k, f) in out.forces_n[..nc].iter().enumerate() {
                 let base = 3 * k * nv;
-                s -= self.jc[base + i] * f.x
-                    + self.jc[base + nv + i] * f.y
-                    + self.jc[base + 2 * nv + i] * f.z;
+                s -= jc[base + i] * f.x + jc[base + nv + i] * f.y + jc[base + 2 * nv + i] * f.z;
             }
             *t = s;
         }
@@ -403,98 +468,6 @@ impl WholeBody {
         (lin, ang)
     }
 
-    /// Adds the task in `jt[..rows·nv]` (target in `target[..rows]`, bias
-    /// already subtracted) to `qdd` in the null space of the tasks before it,
-    /// and shrinks that null space (unless it is the `last`).
-    fn task(&mut self, rows: usize, last: bool) {
-        if rows == 0 {
-            return;
-        }
-        let nv = self.nv;
-        // JN = J N
-        for r in 0..rows {
-            for c in 0..nv {
-                let mut s = 0.0;
-                for k in 0..nv {
-                    s += self.jt[r * nv + k] * self.null[k * nv + c];
-                }
-                self.jn[r * nv + c] = s;
-            }
-        }
-        // B = M⁻¹ (JN)ᵀ (nv × rows)
-        for i in 0..nv {
-            for r in 0..rows {
-                let mut s = 0.0;
-                for k in 0..nv {
-                    s += self.minv[i * nv + k] * self.jn[r * nv + k];
-                }
-                self.b[i * rows + r] = s;
-            }
-        }
-        // Λ⁻¹ = JN B + λ I (rows × rows), factored
-        for r in 0..rows {
-            for c in 0..rows {
-                let mut s = 0.0;
-                for k in 0..nv {
-                    s += self.jn[r * nv + k] * self.b[k * rows + c];
-                }
-                self.lam[r * rows + c] = s + if r == c { self.params.damping } else { 0.0 };
-            }
-        }
-        if !cholesky_dense(&mut self.lam[..rows * rows], rows) {
-            return; // the task has no room left in the null space
-        }
-        // e = target − J q̈
-        for r in 0..rows {
-            let mut s = self.target[r];
-            for k in 0..nv {
-                s -= self.jt[r * nv + k] * self.qdd[k];
-            }
-            self.col[r] = s;
-        }
-        cholesky_dense_solve(&self.lam[..rows * rows], rows, &mut self.col[..rows]);
-        // q̈ += B Λ e
-        for i in 0..nv {
-            let mut s = 0.0;
-            for r in 0..rows {
-                s += self.b[i * rows + r] * self.col[r];
-            }
-            self.qdd[i] += s;
-        }
-        if last {
-            return;
-        }
-        // J̄ = B Λ (nv × rows): solve Λ⁻¹ X = Bᵀ column by column
-        for i in 0..nv {
-            for r in 0..rows {
-                self.col[r] = self.b[i * rows + r];
-            }
-            cholesky_dense_solve(&self.lam[..rows * rows], rows, &mut self.col[..rows]);
-            for r in 0..rows {
-                self.a[i * rows + r] = self.col[r];
-            }
-        }
-        // N ← N (I − J̄ JN) = N − (N J̄) JN
-        for i in 0..nv {
-            // row i of N J̄ (rows entries) into col
-            for r in 0..rows {
-                let mut s = 0.0;
-                for k in 0..nv {
-                    s += self.null[i * nv + k] * self.a[k * rows + r];
-                }
-                self.col[r] = s;
-            }
-            for c in 0..nv {
-                let mut s = 0.0;
-                for r in 0..rows {
-                    s += self.col[r] * self.jn[r * nv + c];
-                }
-                self.c[i * nv + c] = self.null[i * nv + c] - s;
-            }
-        }
-        std::mem::swap(&mut self.null, &mut self.c);
-    }
-
     /// Fills `Z` (nv × 6): the base's rows the identity, each foot's leg
     /// `−J_j⁺ J_b` (its joint columns `J_j`, the base's `J_b`, damped
     /// least-squares inverse), so that changing the base's acceleration by
@@ -508,10 +481,11 @@ impl WholeBody {
         }
         for foot in 0..nc + np {
             let rows = if foot < nc {
-                &self.jc[3 * foot * nv..3 * (foot + 1) * nv]
+                &self.rows[3 * foot * nv..3 * (foot + 1) * nv]
             } else {
                 let f = foot - nc;
-                &self.jp[3 * f * nv..3 * (f + 1) * nv]
+                let r0 = self.swing_row + 3 * f;
+                &self.rows[r0 * nv..(r0 + 3) * nv]
             };
             // the leg's joint columns (the chain's, past the base)
             let mut cols = [0usize; 8];
@@ -567,29 +541,35 @@ impl WholeBody {
             for (c, ct) in contacts.iter().enumerate() {
                 let f = ct.force_plan_n;
                 let base = 3 * c * nv;
-                s += self.jc[base + i] * f.x
-                    + self.jc[base + nv + i] * f.y
-                    + self.jc[base + 2 * nv + i] * f.z;
+                s += self.rows[base + i] * f.x
+                    + self.rows[base + nv + i] * f.y
+                    + self.rows[base + 2 * nv + i] * f.z;
             }
             *ri = s;
         }
-        // M_b Z (6 × 6), factored by LU
-        let mut mbz = nalgebra::Matrix6::<f64>::zeros();
-        for i in 0..6 {
-            for k in 0..6 {
-                let mut s = 0.0;
-                for c in 0..nv {
-                    s += self.m[i * nv + c] * self.z[c * 6 + k];
+        // M_b Z (6 × 6): each row a sum of Z's rows
+        let mut mbz = [[0.0; 6]; 6];
+        for (i, acc) in mbz.iter_mut().enumerate() {
+            for (c, &mic) in self.m[i * nv..(i + 1) * nv].iter().enumerate() {
+                let zc = &self.z[c * 6..c * 6 + 6];
+                for k in 0..6 {
+                    acc[k] += mic * zc[k];
                 }
-                mbz[(i, k)] = s;
             }
         }
-        let lu = mbz.lu();
-        // d0 = (M_b Z)⁻¹ r; A = (M_b Z)⁻¹ J_cbᵀ (6 × n)
-        let Some(d0v) = lu.solve(&nalgebra::Vector6::from_column_slice(&r)) else {
+        // d0 = (M_b Z)⁻¹ r; A = (M_b Z)⁻¹ J_cbᵀ (6 × n): one elimination
+        // for the n + 1 right-hand sides
+        let mut rhs = [[0.0; 6]; MAX_VARS + 1];
+        rhs[0] = r;
+        for x in 0..n {
+            for i in 0..6 {
+                rhs[1 + x][i] = self.rows[x * nv + i];
+            }
+        }
+        if !solve6(mbz, &mut rhs[..n + 1]) {
             return;
-        };
-        let d0: [f64; 6] = d0v.into();
+        }
+        let d0 = rhs[0];
         if n == 0 {
             // in flight the base's rows decide its acceleration alone
             out.base_change = d0;
@@ -597,16 +577,8 @@ impl WholeBody {
         }
         let mut amat = [[0.0; MAX_VARS]; 6];
         for x in 0..n {
-            let (c, axis) = (x / 3, x % 3);
-            let mut colv = nalgebra::Vector6::<f64>::zeros();
             for i in 0..6 {
-                colv[i] = self.jc[(3 * c + axis) * nv + i];
-            }
-            let Some(sol) = lu.solve(&colv) else {
-                return;
-            };
-            for i in 0..6 {
-                amat[i][x] = sol[i];
+                amat[i][x] = rhs[1 + x][i];
             }
         }
         let p = &self.params;
@@ -674,6 +646,51 @@ impl WholeBody {
     }
 }
 
+/// Solves `a x = b` for each `b` in `rhs` (in place) by Gaussian elimination
+/// with partial pivoting; `false` when a pivot is zero (`a` singular).
+fn solve6(mut a: [[f64; 6]; 6], rhs: &mut [[f64; 6]]) -> bool {
+    for p in 0..6 {
+        let mut piv = p;
+        for i in p + 1..6 {
+            if a[i][p].abs() > a[piv][p].abs() {
+                piv = i;
+            }
+        }
+        if a[piv][p] == 0.0 {
+            return false;
+        }
+        if piv != p {
+            a.swap(piv, p);
+            for b in rhs.iter_mut() {
+                b.swap(piv, p);
+            }
+        }
+        let inv = 1.0 / a[p][p];
+        for i in p + 1..6 {
+            let f = a[i][p] * inv;
+            if f == 0.0 {
+                continue;
+            }
+            for k in p + 1..6 {
+                a[i][k] -= f * a[p][k];
+            }
+            for b in rhs.iter_mut() {
+                b[i] -= f * b[p];
+            }
+        }
+    }
+    for b in rhs.iter_mut() {
+        for i in (0..6).rev() {
+            let mut s = b[i];
+            for k in i + 1..6 {
+                s -= a[i][k] * b[k];
+            }
+            b[i] = s / a[i][i];
+        }
+    }
+    true
+}
+
 /// The classical acceleration (m/s², world) of the point `point_m` fixed on
 /// `body` when `q̈ = 0`: `J̇ v`. Reads the bodies' spatial accelerations of an
 /// RNEA pass run with zero acceleration (which start from gravity's
@@ -683,4 +700,178 @@ fn point_bias(model: &Model, data: &Data, body: usize, point_m: DVec3) -> DVec3 
     let acc = data.acc[body];
     let vel = data.vel[body];
     acc.point_velocity(r) + vel.ang.cross(vel.point_velocity(r)) + model.gravity
+}
+
+/// The dense recursion of the module docs (the reference for the task-space
+/// form): `M⁻¹` and the null-space projector `N` as `nv × nv` matrices.
+#[derive(Clone, Debug)]
+struct DenseHierarchy {
+    l: Vec<f64>,
+    minv: Vec<f64>,
+    null: Vec<f64>,
+    c: Vec<f64>,
+    jn: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    lam: Vec<f64>,
+    col: Vec<f64>,
+}
+
+impl DenseHierarchy {
+    fn new(nv: usize) -> DenseHierarchy {
+        DenseHierarchy {
+            l: vec![0.0; nv * nv],
+            minv: vec![0.0; nv * nv],
+            null: vec![0.0; nv * nv],
+            c: vec![0.0; nv * nv],
+            jn: vec![0.0; MAX_ROWS * nv],
+            a: vec![0.0; MAX_ROWS * nv],
+            b: vec![0.0; nv * MAX_ROWS],
+            lam: vec![0.0; MAX_ROWS * MAX_ROWS],
+            col: vec![0.0; nv.max(MAX_ROWS)],
+        }
+    }
+
+    /// `qdd` from the stacked `rows` and `target` of `tasks`; `false` when
+    /// `m` is not positive definite.
+    fn solve(
+        &mut self,
+        m: &[f64],
+        rows: &[f64],
+        target: &[f64],
+        tasks: &[(usize, usize); 4],
+        damping: f64,
+        qdd: &mut [f64],
+    ) -> bool {
+        let nv = qdd.len();
+        self.l.copy_from_slice(m);
+        if !cholesky_dense(&mut self.l, nv) {
+            return false;
+        }
+        for i in 0..nv {
+            self.col.fill(0.0);
+            self.col[i] = 1.0;
+            cholesky_dense_solve(&self.l, nv, &mut self.col[..nv]);
+            for r in 0..nv {
+                self.minv[r * nv + i] = self.col[r];
+            }
+        }
+        qdd.fill(0.0);
+        self.null.fill(0.0);
+        for i in 0..nv {
+            self.null[i * nv + i] = 1.0;
+        }
+        let last = tasks.iter().rposition(|&(_, n)| n > 0).unwrap_or(0);
+        for (t, &(o, n)) in tasks.iter().enumerate() {
+            self.task(
+                &rows[o * nv..(o + n) * nv],
+                &target[o..o + n],
+                n,
+                t == last,
+                damping,
+                qdd,
+            );
+        }
+        true
+    }
+
+    /// Adds the task in `jt` (`rows × nv`; target in `target`, bias
+    /// already subtracted) to `qdd` in the null space of the tasks before it,
+    /// and shrinks that null space (unless it is the `last`).
+    fn task(
+        &mut self,
+        jt: &[f64],
+        target: &[f64],
+        rows: usize,
+        last: bool,
+        damping: f64,
+        qdd: &mut [f64],
+    ) {
+        if rows == 0 {
+            return;
+        }
+        let nv = qdd.len();
+        // JN = J N
+        for r in 0..rows {
+            for c in 0..nv {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += jt[r * nv + k] * self.null[k * nv + c];
+                }
+                self.jn[r * nv + c] = s;
+            }
+        }
+        // B = M⁻¹ (JN)ᵀ (nv × rows)
+        for i in 0..nv {
+            for r in 0..rows {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.minv[i * nv + k] * self.jn[r * nv + k];
+                }
+                self.b[i * rows + r] = s;
+            }
+        }
+        // Λ⁻¹ = JN B + λ I (rows × rows), factored
+        for r in 0..rows {
+            for c in 0..rows {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.jn[r * nv + k] * self.b[k * rows + c];
+                }
+                self.lam[r * rows + c] = s + if r == c { damping } else { 0.0 };
+            }
+        }
+        if !cholesky_dense(&mut self.lam[..rows * rows], rows) {
+            return; // the task has no room left in the null space
+        }
+        // e = target − J q̈
+        for r in 0..rows {
+            let mut s = target[r];
+            for k in 0..nv {
+                s -= jt[r * nv + k] * qdd[k];
+            }
+            self.col[r] = s;
+        }
+        cholesky_dense_solve(&self.lam[..rows * rows], rows, &mut self.col[..rows]);
+        // q̈ += B Λ e
+        for i in 0..nv {
+            let mut s = 0.0;
+            for r in 0..rows {
+                s += self.b[i * rows + r] * self.col[r];
+            }
+            qdd[i] += s;
+        }
+        if last {
+            return;
+        }
+        // J̄ = B Λ (nv × rows): solve Λ⁻¹ X = Bᵀ column by column
+        for i in 0..nv {
+            for r in 0..rows {
+                self.col[r] = self.b[i * rows + r];
+            }
+            cholesky_dense_solve(&self.lam[..rows * rows], rows, &mut self.col[..rows]);
+            for r in 0..rows {
+                self.a[i * rows + r] = self.col[r];
+            }
+        }
+        // N ← N (I − J̄ JN) = N − (N J̄) JN
+        for i in 0..nv {
+            // row i of N J̄ (rows entries) into col
+            for r in 0..rows {
+                let mut s = 0.0;
+                for k in 0..nv {
+                    s += self.null[i * nv + k] * self.a[k * rows + r];
+                }
+                self.col[r] = s;
+            }
+            for c in 0..nv {
+                let mut s = 0.0;
+                for r in 0..rows {
+                    s += self.col[r] * self.jn[r * nv + c];
+                }
+                self.c[i * nv + c] = self.null[i * nv + c] - s;
+            }
+        }
+        std::mem::swap(&mut self.null, &mut self.c);
+    }
 }
