@@ -8,7 +8,7 @@
 //! [3 s, 8 s] within 5 % of the command, roll and pitch inside ±0.15 rad over
 //! the whole run (the command's ramp from rest included). The same holds
 //! for the convex-MPC planner (`planner = "mpc"`), at 1.0 and 1.25 m/s,
-//! for the default walker's pace, bound and pronk at 0.5 m/s, and for the
+//! for the default walker's walk, pace, bound and pronk at 0.5 m/s, and for the
 //! default walker carrying a 10 kg box unknown to it and a 15 kg box it knows.
 
 use std::path::Path;
@@ -119,8 +119,8 @@ fn mpc_planner_trots_one_and_a_quarter_metres_per_second_from_every_neighbour() 
 }
 
 #[test]
-fn default_walker_paces_bounds_and_pronks_half_a_metre_per_second_from_every_neighbour() {
-    for gait in ["pace", "bound", "pronk"] {
+fn default_walker_walks_paces_bounds_and_pronks_half_a_metre_per_second_from_every_neighbour() {
+    for gait in ["walk", "pace", "bound", "pronk"] {
         all_neighbours_hold(0.5, &format!("gait = \"{gait}\""));
     }
 }

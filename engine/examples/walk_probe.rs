@@ -248,7 +248,11 @@ fn main() {
     }
     let mut walker = Walker::new(&desc, &model, p).unwrap();
     let mut st_q_lift = 0.0;
-    let concrete = GroundMaterial::preset("concrete").unwrap();
+    let mut concrete = GroundMaterial::preset("concrete").unwrap();
+    if let Some(mu) = env("MU") {
+        concrete.friction = mu;
+    }
+    let concrete = concrete;
     let mut terrain = TerrainUnion::flat(0.0, concrete);
     if let Some(x0) = env("SINE") {
         // trot_sine's waves: amplitude 5 cm, wavelength 2 m, 40 m long from x = SINE
