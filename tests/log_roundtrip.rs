@@ -649,3 +649,184 @@ fn a_file_that_is_not_a_log_is_named_in_the_error() {
         );
     }
 }
+
+/// Issue 29, item 9: `quadsim export` keys a robot's sensor readings by its
+/// joints' and feet's names (the model's, as `joint_states` and `feet` carry
+/// them), not by index: `encoder_position_rad.LF_knee`, `contact.LF_foot`;
+/// each column holds that joint's or foot's reading. Two models (quad16's
+/// `*_hip_roll`, quad12's `*_hip_yaw`) get their own names.
+#[test]
+fn export_names_sensor_columns_by_joint_and_foot() {
+    let dir = tmp("sensor_csv");
+    let scn = dir.join("logtest.toml");
+    std::fs::write(&scn, scenario(0.05, "").replace("log = false\n", "")).unwrap();
+    let out = dir.join("run");
+    run_cli(&scn, &out, &["--no-report", "--no-monitor"]);
+    let csv_dir = dir.join("csv");
+    let o = quadsim()
+        .arg("export")
+        .arg(out.join("log.mcap"))
+        .arg("--csv")
+        .arg(&csv_dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = read_log(&out.join("log.mcap")).unwrap();
+    let names = |v: &Value, key: &str, field: Option<&str>| -> Vec<String> {
+        v[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| field.map_or(x, |f| &x[f]).as_str().unwrap().to_string())
+            .collect()
+    };
+    for (robot, hip) in [("rex", "LF_hip_roll"), ("quiet", "LF_hip_yaw")] {
+        let joints = names(&last(&c, &format!("/{robot}/joint_states")), "name", None);
+        let feet = names(&last(&c, &format!("/{robot}/feet")), "feet", Some("name"));
+        assert!(joints.iter().any(|j| j == hip), "{robot}: {joints:?}");
+        assert_eq!(feet.len(), 4);
+        let sensors: Vec<Value> = c
+            .topic(&format!("/{robot}/sensors"))
+            .map(|m| m.json().unwrap())
+            .collect();
+        assert!(!sensors.is_empty(), "{robot} has sensors");
+        let mut r = csv::Reader::from_path(csv_dir.join(format!("{robot}.sensors.csv"))).unwrap();
+        let header: Vec<String> = r.headers().unwrap().iter().map(str::to_string).collect();
+        assert!(
+            !header
+                .iter()
+                .any(|h| h.ends_with(".0") || h.ends_with(".1")),
+            "{robot}: an indexed column in {header:?}"
+        );
+        let rows: Vec<csv::StringRecord> = r.records().map(Result::unwrap).collect();
+        assert_eq!(rows.len(), sensors.len());
+        let column = |name: &str| {
+            header
+                .iter()
+                .position(|h| h == name)
+                .unwrap_or_else(|| panic!("{robot}: no column {name} in {header:?}"))
+        };
+        let (last_row, last_msg) = (rows.last().unwrap(), sensors.last().unwrap());
+        for (key, list) in [
+            ("encoder_position_rad", &joints),
+            ("encoder_velocity_radps", &joints),
+            ("contact", &feet),
+        ] {
+            for (i, name) in list.iter().enumerate() {
+                let cell = &last_row[column(&format!("{key}.{name}"))];
+                let x = &last_msg[key][i];
+                let want = match x {
+                    Value::Bool(b) => if *b { "1" } else { "0" }.to_string(),
+                    v => v.as_f64().unwrap().to_string(),
+                };
+                let got = match x {
+                    Value::Bool(_) => cell.to_string(),
+                    _ => cell.parse::<f64>().unwrap().to_string(),
+                };
+                assert_eq!(got, want, "{robot}: {key}.{name}");
+            }
+        }
+        // model order: the columns follow the joints' order
+        let first = column(&format!("encoder_position_rad.{}", joints[0]));
+        let lastj = column(&format!(
+            "encoder_position_rad.{}",
+            joints[joints.len() - 1]
+        ));
+        assert_eq!(lastj - first, joints.len() - 1, "{robot}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Issue 29, item 9: `/scene`'s entities carry every field of Foxglove's
+/// `foxglove.SceneEntity` (its own schema, from the `foxglove` crate),
+/// unused primitive lists as empty arrays, and every primitive every field
+/// of its type; the JSON Schema the log stores declares them all. The live
+/// bridge serves the same message (`monitor::publish` encodes it with the
+/// log's `encode_scene`).
+#[test]
+fn scene_entities_carry_foxgloves_full_schema() {
+    use foxglove::Encode;
+    use prost_reflect::{DescriptorPool, Kind, MessageDescriptor};
+    let dir = tmp("scene_schema");
+    let scn = dir.join("logtest.toml");
+    std::fs::write(&scn, scenario(0.01, "")).unwrap();
+    let out = dir.join("run");
+    run_cli(&scn, &out, &["--no-report", "--no-monitor"]);
+    let c = read_log(&out.join("log.mcap")).unwrap();
+    let scene = c.topic("/scene").next().unwrap().json().unwrap();
+    let schema = foxglove::schemas::SceneEntity::get_schema().unwrap();
+    let pool = DescriptorPool::decode(&schema.data[..]).unwrap();
+    let entity = pool.get_message_by_name("foxglove.SceneEntity").unwrap();
+    let fields = |d: &MessageDescriptor| -> Vec<String> {
+        d.fields().map(|f| f.name().to_string()).collect()
+    };
+    let entity_fields = fields(&entity);
+    for f in [
+        "arrows",
+        "cubes",
+        "spheres",
+        "cylinders",
+        "lines",
+        "triangles",
+        "texts",
+        "models",
+        "metadata",
+        "frame_locked",
+        "lifetime",
+        "timestamp",
+        "id",
+        "frame_id",
+    ] {
+        assert!(
+            entity_fields.iter().any(|x| x == f),
+            "{f} in Foxglove's schema"
+        );
+    }
+    let entities = scene["entities"].as_array().unwrap();
+    assert!(entities.len() > 10);
+    let mut seen_primitives = std::collections::BTreeSet::new();
+    for e in entities {
+        let keys: Vec<&String> = e.as_object().unwrap().keys().collect();
+        for f in &entity_fields {
+            assert!(
+                e.get(f).is_some(),
+                "entity {}: no {f} (has {keys:?})",
+                e["id"]
+            );
+        }
+        assert_eq!(keys.len(), entity_fields.len(), "{keys:?}");
+        // each primitive has every field of its message type
+        for field in entity.fields().filter(|f| f.is_list()) {
+            let Kind::Message(prim) = field.kind() else {
+                continue;
+            };
+            for p in e[field.name()].as_array().unwrap() {
+                seen_primitives.insert(field.name().to_string());
+                for f in fields(&prim) {
+                    assert!(p.get(&f).is_some(), "{}: {f} missing in {p}", field.name());
+                }
+            }
+        }
+    }
+    assert!(seen_primitives.contains("cubes") && seen_primitives.contains("triangles"));
+    // and the log's JSON Schema for /scene declares every field
+    let stored: Value =
+        serde_json::from_slice(&c.schemas[Schema::SceneUpdate.name()].data).unwrap();
+    let declared = &stored["properties"]["entities"]["items"]["properties"];
+    for field in entity.fields() {
+        let d = &declared[field.name()];
+        assert!(d.is_object(), "schema lacks {}", field.name());
+        if let (true, Kind::Message(prim)) = (field.is_list(), field.kind())
+            && prim.name() != "KeyValuePair"
+        {
+            for f in fields(&prim) {
+                assert!(
+                    d["items"]["properties"][&f].is_object(),
+                    "schema lacks {}.{f}",
+                    field.name()
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -41,7 +41,8 @@ pub struct ActuatorStats {
 /// One joint's figures.
 #[derive(Clone, Debug, PartialEq)]
 pub struct JointLoad {
-    /// Largest applied |τ| (N·m or N).
+    /// Largest applied |τ| (N·m or N): the torque acting at the joint (a
+    /// motor's inside its envelope), as recorded by [`ActuatorStats::record`].
     pub peak_torque_nm: f64,
     /// Largest |τ| commanded, before the limit (N·m or N): what the
     /// controller (or a servo's own loop) asked for.
@@ -50,7 +51,8 @@ pub struct JointLoad {
     pub torque_limit_nm: f64,
     /// The speed limit (rad/s or m/s; +∞ when unlimited).
     pub speed_limit: f64,
-    /// `peak_torque_nm` / effort limit (0 when unlimited), ≤ 1.
+    /// `peak_torque_nm` / effort limit (0 when unlimited), ≤ 1 when the
+    /// applied torque is saturated (`passive.saturation`, the default).
     pub peak_torque_share: f64,
     /// Time with the command at or beyond the effort limit (s).
     pub time_at_torque_limit_s: f64,
@@ -106,18 +108,26 @@ impl ActuatorStats {
         }
     }
 
-    /// Records one step of `dt_s` with commanded torques `tau_cmd` and joint
-    /// speeds `qd` (joint order). Extra or missing entries are ignored.
-    pub fn record(&mut self, tau_cmd: &[f64], qd: &[f64], dt_s: f64) {
+    /// Records one step of `dt_s` with commanded torques `tau_cmd`, the
+    /// torques `applied` at the joints over the step (the motor's torque
+    /// inside its envelope, or the command after saturation: the quantity
+    /// the metrics' `joint_peak_abs_torque_nm` and the log's joint effort
+    /// hold) and joint speeds `qd` (joint order). Extra or missing entries
+    /// are ignored.
+    pub fn record(&mut self, tau_cmd: &[f64], applied: &[f64], qd: &[f64], dt_s: f64) {
         // an x86-64-v3 clone (three-operand VEX forms, wider vectors; no
         // fused multiply–add, so the same bits), in a free function:
         // multiversion takes no `self`
         #[multiversion::multiversion(targets("x86_64+avx2+fma"))]
-        fn body(this: &mut ActuatorStats, tau_cmd: &[f64], qd: &[f64], dt_s: f64) {
+        fn body(this: &mut ActuatorStats, tau_cmd: &[f64], applied: &[f64], qd: &[f64], dt_s: f64) {
             this.time_s += dt_s;
             // every per-joint list as a slice of one length, so that the loop
             // indexes without bounds checks
-            let n = this.effort_limit.len().min(tau_cmd.len());
+            let n = this
+                .effort_limit
+                .len()
+                .min(tau_cmd.len())
+                .min(applied.len());
             let (effort, velocity) = (&this.effort_limit[..n], &this.velocity_limit[..n]);
             let (peak_torque, peak_demand) = (
                 &mut this.peak_abs_torque[..n],
@@ -128,19 +138,20 @@ impl ActuatorStats {
                 &mut this.at_speed_limit_s[..n],
             );
             let (torque_hits, speed_hits) = (&mut this.torque_hits[..n], &mut this.speed_hits[..n]);
-            let tau_cmd = &tau_cmd[..n];
+            let (tau_cmd, applied) = (&tau_cmd[..n], &applied[..n]);
             // the peaks on their own, and whether any joint is at its torque
             // limit: an element-wise loop without branches, which vectorises
             // (the same operations per joint)
             let mut any_at_torque = false;
-            for (((peak_t, peak_d), tau), lim) in peak_torque
+            for ((((peak_t, peak_d), tau), a), lim) in peak_torque
                 .iter_mut()
                 .zip(peak_demand.iter_mut())
                 .zip(tau_cmd)
+                .zip(applied)
                 .zip(effort)
             {
                 let t = tau.abs();
-                *peak_t = crate::metrics::max_of_peak(*peak_t, t.min(*lim));
+                *peak_t = crate::metrics::max_of_peak(*peak_t, a.abs());
                 *peak_d = crate::metrics::max_of_peak(*peak_d, t);
                 any_at_torque |= t >= *lim;
             }
@@ -178,7 +189,7 @@ impl ActuatorStats {
                 this.any_was_at_speed = this.was_at_speed.contains(&true);
             }
         }
-        body(self, tau_cmd, qd, dt_s)
+        body(self, tau_cmd, applied, qd, dt_s)
     }
 
     /// Records, for the step of `dt_s` just recorded by [`Self::record`],
@@ -243,9 +254,9 @@ mod tests {
     fn times_at_limits_and_peak_shares_add_up() {
         let mut s = ActuatorStats::new(&[10.0, f64::INFINITY], &[5.0, 5.0]);
         // 3 steps of 0.1 s: joint 0 at 4, 12 (clamped, at limit), -10 (at limit)
-        s.record(&[4.0, 100.0], &[1.0, 6.0], 0.1);
-        s.record(&[12.0, 0.0], &[-5.0, 0.0], 0.1);
-        s.record(&[-10.0, 0.0], &[0.0, 0.0], 0.1);
+        s.record(&[4.0, 100.0], &[4.0, 100.0], &[1.0, 6.0], 0.1);
+        s.record(&[12.0, 0.0], &[10.0, 0.0], &[-5.0, 0.0], 0.1);
+        s.record(&[-10.0, 0.0], &[-10.0, 0.0], &[0.0, 0.0], 0.1);
         let m = s.summary();
         assert_eq!(m.joints[0].peak_torque_nm, 10.0);
         assert_eq!(m.joints[0].peak_demand_nm, 12.0);
@@ -266,12 +277,26 @@ mod tests {
     fn envelope_hits_count_entries() {
         let mut s = ActuatorStats::new(&[1.0], &[1.0]);
         for at in [true, true, false, true, false] {
-            s.record(&[0.0], &[0.0], 0.5);
+            s.record(&[0.0], &[0.0], &[0.0], 0.5);
             s.record_envelope(&[at], 0.5);
         }
         let m = s.summary();
         assert_eq!(m.joints[0].envelope_limit_hits, 2);
         assert!((m.joints[0].time_at_envelope_limit_s - 1.5).abs() < 1e-12);
         assert!((m.max_time_share_at_envelope_limit - 0.6).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_peak_torque_is_the_applied_torques_not_the_clamped_demand() {
+        // a motor whose envelope holds the applied torque below a demand
+        // that is itself under the limit (a joint at speed)
+        let mut s = ActuatorStats::new(&[100.0], &[30.0]);
+        s.record(&[96.0], &[91.5], &[10.0], 0.1);
+        s.record(&[-20.0], &[-20.0], &[0.0], 0.1);
+        let m = s.summary();
+        assert_eq!(m.joints[0].peak_torque_nm, 91.5);
+        assert_eq!(m.joints[0].peak_demand_nm, 96.0);
+        assert!((m.joints[0].peak_torque_share - 0.915).abs() < 1e-12);
+        assert_eq!(m.joints[0].time_at_torque_limit_s, 0.0);
     }
 }

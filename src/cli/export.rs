@@ -6,7 +6,10 @@
 //! path (`pose.position.x`). Arrays of named things are keyed by name instead
 //! of index: joint arrays by the `name` array beside them
 //! (`position.LF_knee`), feet by their `name` (`feet.LF_foot.force.z`),
-//! transforms by their `child_frame_id`. Booleans become 1/0, null an empty
+//! transforms by their `child_frame_id`; a robot's sensor readings, which
+//! carry no names, by its joints' and feet's names in the model's order as
+//! its `joint_states` and `feet` messages give them
+//! (`encoder_position_rad.LF_knee`, `contact.LF_foot`). Booleans become 1/0, null an empty
 //! cell; `timestamp` and `frame_id` are left out (the log time is `t_s`, the
 //! frame is in `docs/logs.md`). The 3D scene and the terrain description are
 //! not time series and are not exported.
@@ -70,6 +73,7 @@ pub fn export_csv(contents: &LogContents, dir: &Path) -> Result<Vec<PathBuf>, Cl
     let mut files = Vec::new();
     for topic in contents.topics() {
         let mut rows: Vec<(f64, Row)> = Vec::new();
+        let mut named: Option<Named> = None;
         for m in contents.topic(&topic) {
             if skip.contains(&m.schema.as_str()) {
                 continue;
@@ -81,7 +85,12 @@ pub fn export_csv(contents: &LogContents, dir: &Path) -> Result<Vec<PathBuf>, Cl
                 ))
             })?;
             let mut row = Row::new();
-            flatten(&v, "", &mut row);
+            if m.schema == Schema::Sensors.name() {
+                let named = named.get_or_insert_with(|| sensor_names(contents, &topic));
+                flatten_named(&v, named, &mut row);
+            } else {
+                flatten(&v, "", &mut row);
+            }
             rows.push((m.t_s(), row));
         }
         if rows.is_empty() {
@@ -92,6 +101,66 @@ pub fn export_csv(contents: &LogContents, dir: &Path) -> Result<Vec<PathBuf>, Cl
         files.push(path);
     }
     Ok(files)
+}
+
+/// Names for a message's top-level arrays that carry none themselves:
+/// `(key, names)`.
+type Named = Vec<(&'static str, Vec<String>)>;
+
+/// The names of a `/<robot>/sensors` channel's arrays: the encoder readings
+/// by the robot's actuated joints (its `joint_states`' `name`, the model's
+/// velocity order), the contact flags and forces by its feet (its `feet`'
+/// names, the model's foot order). Empty where the log has no such message.
+fn sensor_names(contents: &LogContents, topic: &str) -> Named {
+    let robot = topic.strip_suffix("/sensors").unwrap_or(topic);
+    let first = |channel: &str| {
+        contents
+            .topic(&format!("{robot}/{channel}"))
+            .find_map(|m| m.json().ok())
+    };
+    let strings = |a: Option<&Value>, key: Option<&str>| -> Vec<String> {
+        a.and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+            .filter_map(|x| key.map_or(Some(x), |k| x.get(k)))
+            .filter_map(|x| x.as_str().map(str::to_string))
+            .collect()
+    };
+    let joints = first("joint_states").map_or_else(Vec::new, |v| strings(v.get("name"), None));
+    let feet = first("feet").map_or_else(Vec::new, |v| strings(v.get("feet"), Some("name")));
+    vec![
+        ("encoder_position_rad", joints.clone()),
+        ("encoder_velocity_radps", joints),
+        ("contact", feet.clone()),
+        ("contact_force_n", feet),
+    ]
+}
+
+/// [`flatten`] of a message whose top-level arrays `named` lists: an array
+/// with as many elements as its names is keyed by them (`contact.LF_foot`),
+/// any other by index as before.
+fn flatten_named(v: &Value, named: &Named, out: &mut Row) {
+    let Value::Object(map) = v else {
+        return flatten(v, "", out);
+    };
+    for (k, x) in map {
+        if matches!(k.as_str(), "timestamp" | "frame_id" | "name") {
+            continue;
+        }
+        let names = named
+            .iter()
+            .find(|(key, _)| key == k)
+            .map(|(_, n)| n)
+            .filter(|n| !n.is_empty());
+        match (x, names) {
+            (Value::Array(a), Some(n)) if a.len() == n.len() => {
+                for (name, e) in n.iter().zip(a) {
+                    flatten(e, &join(k, name), out);
+                }
+            }
+            _ => flatten(x, k, out),
+        }
+    }
 }
 
 /// `/rex/joint_states` → `rex.joint_states.csv`.

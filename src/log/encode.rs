@@ -407,6 +407,9 @@ const GROUND_COLOR: Color = Color {
     a: 1.0,
 };
 
+/// A `foxglove.SceneEntity` with every field of Foxglove's schema, in its
+/// order (unused primitive lists empty), so that a reader holding to the
+/// schema finds them all.
 #[derive(Serialize, Default)]
 struct Entity<'a> {
     timestamp: Option<Time>,
@@ -415,10 +418,13 @@ struct Entity<'a> {
     lifetime: Option<Time>,
     frame_locked: bool,
     metadata: Vec<KeyValue<'a>>,
+    arrows: Vec<serde_json::Value>,
     cubes: Vec<serde_json::Value>,
     spheres: Vec<serde_json::Value>,
     cylinders: Vec<serde_json::Value>,
+    lines: Vec<serde_json::Value>,
     triangles: Vec<serde_json::Value>,
+    texts: Vec<serde_json::Value>,
     models: Vec<serde_json::Value>,
 }
 

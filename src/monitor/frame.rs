@@ -72,7 +72,8 @@ pub struct RobotFrame {
     pub joint_q_desired_rad: [f64; MAX_DOF],
     /// Controller's desired joint velocities (rad/s).
     pub joint_qd_desired_radps: [f64; MAX_DOF],
-    /// Actuator torques acting over the step, after saturation (N·m).
+    /// Actuator torques acting over the step (N·m): a motor's inside its
+    /// envelope, else the command after saturation (the log's joint effort).
     pub joint_tau_nm: [f64; MAX_DOF],
     /// Controller's torque command before saturation (N·m).
     pub joint_tau_desired_nm: [f64; MAX_DOF],

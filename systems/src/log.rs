@@ -248,7 +248,8 @@ pub struct RobotSample {
     pub joint_position: Vec<f64>,
     /// Joint velocities (rad/s).
     pub joint_velocity: Vec<f64>,
-    /// Actuator torques that act over the step (N·m): the command after saturation.
+    /// Actuator torques that act over the step (N·m): the motors' torques
+    /// inside their envelopes, or the command after saturation ([`SampleView::joint_effort`]).
     pub joint_effort: Vec<f64>,
     /// The controller's command before saturation (N·m).
     pub joint_effort_command: Vec<f64>,
@@ -1099,15 +1100,25 @@ impl<'a> SampleView<'a> {
         &self.sim.tau_actuator[m.base_nv()..m.actuated_nv()]
     }
 
-    /// Actuator torques that act over the step (N·m): the command after saturation.
+    /// Actuator torques that act over the step (N·m): with actuator models
+    /// the motors' torques inside their envelopes
+    /// ([`ActuatorBank::applied`](quadsim_engine::actuator_model::ActuatorBank::applied)),
+    /// otherwise the command after saturation; the same torques as the
+    /// metrics' (`summary.json`'s `peak_abs_torque_nm`, `peak_torque_nm`).
     #[inline]
     pub fn joint_effort(&self) -> impl ExactSizeIterator<Item = f64> + 'a {
         let m = self.model();
         let saturate = self.sim.workspace.passive.saturation;
+        let applied = self.sim.workspace.actuators.as_ref().map(|b| b.applied());
         self.joint_effort_command()
             .iter()
             .zip(&m.effort_limit[m.base_nv()..])
-            .map(move |(&t, &lim)| if saturate { t.clamp(-lim, lim) } else { t })
+            .enumerate()
+            .map(move |(j, (&t, &lim))| match applied {
+                Some(a) if j < a.len() => a[j],
+                _ if saturate => t.clamp(-lim, lim),
+                _ => t,
+            })
     }
 
     /// Joint targets of the controller (rad), when it tracks some.

@@ -86,12 +86,17 @@ pub fn record_robot(sim: &mut RobotSim, dt_s: f64, saturate: bool) {
     match bank {
         Some(b) => {
             run.actuators
-                .record(&b.demand()[..nj], &obs.qd_joints, dt_s);
+                .record(&b.demand()[..nj], &run.tau_joints, &obs.qd_joints, dt_s);
             run.actuators.record_envelope(b.at_envelope(), dt_s);
         }
-        None => run
-            .actuators
-            .record(&tau_actuator[nv0..nv0 + nj], &obs.qd_joints, dt_s),
+        // the peak applied torque is the metrics' (`run.tau_joints`): one
+        // definition for report.md's tables, summary.json and the log
+        None => run.actuators.record(
+            &tau_actuator[nv0..nv0 + nj],
+            &run.tau_joints,
+            &obs.qd_joints,
+            dt_s,
+        ),
     }
     if let quadsim_components::Controller::Walker(w) = &run.controller {
         run.commanded_distance_m.0 += w.active_command().forward_mps * dt_s;
