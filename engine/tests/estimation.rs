@@ -374,7 +374,7 @@ fn estimator_follows_a_trot_with_ideal_sensors() {
 #[test]
 fn estimator_follows_a_trot_with_default_noise() {
     let r = trot(
-        &SensorConfig::defaults_for("quad16", 500.0),
+        &SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0),
         0.5,
         10.0,
         false,
@@ -389,7 +389,7 @@ fn estimator_follows_a_trot_with_default_noise() {
 #[test]
 fn walker_trots_on_the_estimate_with_default_noise() {
     let r = trot(
-        &SensorConfig::defaults_for("quad16", 500.0),
+        &SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0),
         0.5,
         10.0,
         true,
@@ -413,7 +413,7 @@ fn walker_trots_on_the_estimate_with_default_noise() {
 /// same run's error without mocap.
 #[test]
 fn fused_motion_capture_removes_the_drift() {
-    let mut config = SensorConfig::defaults_for("quad16", 500.0);
+    let mut config = SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0);
     if let Some(imu) = config.imu.as_mut() {
         imu.gyro.bias_std = 0.01;
     }
