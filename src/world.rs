@@ -22,13 +22,13 @@ use quadsim_engine::control::walker::{Planner, Walker, WalkerParams};
 use quadsim_engine::description::{RobotDescription, Shape};
 use quadsim_engine::gait::{Gait, GaitKind};
 use quadsim_engine::integrate::{Integrator, State};
-use quadsim_engine::legs::study_b_dynamics::StudyBTorqueComparison;
 use quadsim_engine::metrics::MetricsAccumulator;
 use quadsim_engine::model::BaseKind;
 use quadsim_engine::robots::SourceStudy;
 use quadsim_engine::terrain::{DefaultGround, Terrain as _, TerrainUnion};
 use quadsim_engine::{Data, Model, robots};
 use quadsim_systems::Simulation;
+use quadsim_validation::study_b_dynamics::StudyBTorqueComparison;
 
 use crate::scenario::format::IntegratorSpec;
 use crate::scenario::spans::path_key;
