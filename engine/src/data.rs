@@ -147,21 +147,6 @@ impl Data {
         }
     }
 
-    /// Runs `f` on this thread's spare kinematics-only workspace
-    /// ([`Self::for_kinematics`]) for a model of `model`'s shape (bodies, nq,
-    /// nv), allocated at its first use on the thread: a state estimator's
-    /// leg kinematics, which nothing reads after the update that computes
-    /// them, so that they need not live (and be fetched from memory) in every
-    /// robot. The spare's kinematics cache is cleared before `f`, as
-    /// [`SpareData::with`] clears its spares'.
-    pub fn with_kinematics_spare<R>(model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
-        let taken =
-            SPARE_KINEMATICS.with(|cell| take_fitting(&mut cell.borrow_mut(), model, false));
-        let (result, data) = lend(taken, model, false, f);
-        SPARE_KINEMATICS.with(|cell| keep(&mut cell.borrow_mut(), data));
-        result
-    }
-
     /// Whether this is a workspace sized for `model`: a full one when
     /// `dynamics`, else a kinematics-only one.
     fn fits_as(&self, model: &Model, dynamics: bool) -> bool {
@@ -292,19 +277,25 @@ impl Data {
     }
 }
 
-/// Most spare workspaces a [`SpareData`] (or a thread's kinematics-only
-/// pool, [`Data::with_kinematics_spare`]) keeps.
+/// Most spare workspaces a [`SpareData`] keeps.
 const MAX_SPARES: usize = 8;
 
-/// Spare full workspaces ([`Data`]), one per model shape (bodies, nq, nv) in
-/// use, lent by [`SpareData::with`]: for a second kinematic state beside a
-/// robot's own `Data` (a controller at the estimated state), so that the
-/// robot's kinematics at the true state survive for the stages after it
-/// instead of being recomputed. A value owned by whatever steps the robots,
-/// one per worker (`systems`' `WorkerWorkspace`), and passed explicitly: it
-/// holds nothing a result depends on from one loan to the next.
-#[derive(Debug, Default)]
+/// Spare workspaces ([`Data`]), one per model shape (bodies, nq, nv) in
+/// use, lent by [`SpareData::with`]. Full ones ([`SpareData::default`]): for
+/// a second kinematic state beside a robot's own `Data` (a controller at the
+/// estimated state), so that the robot's kinematics at the true state
+/// survive for the stages after it instead of being recomputed.
+/// Kinematics-only ones ([`SpareData::kinematics_only`],
+/// [`Data::for_kinematics`]): a state estimator's leg kinematics, which
+/// nothing reads after the update that computes them, so that they need not
+/// live (and be fetched from memory) in every robot. A value owned by
+/// whatever steps the robots, one per worker (`systems`'
+/// `WorkerWorkspace`), and passed explicitly: it holds nothing a result
+/// depends on from one loan to the next.
+#[derive(Debug)]
 pub struct SpareData {
+    /// Full workspaces ([`Data::new`]), else kinematics-only ones.
+    dynamics: bool,
     /// Boxed: taking one out and putting it back moves a pointer, not the
     /// `Data` (about 700 bytes of vector headers and the base's subspace,
     /// copied twice per control tick).
@@ -312,15 +303,33 @@ pub struct SpareData {
     spares: Vec<Box<Data>>,
 }
 
+impl Default for SpareData {
+    /// A pool of full workspaces.
+    fn default() -> Self {
+        Self {
+            dynamics: true,
+            spares: Vec::new(),
+        }
+    }
+}
+
 impl SpareData {
-    /// Runs `f` on a spare full workspace for a model of `model`'s shape,
+    /// A pool of kinematics-only workspaces ([`Data::for_kinematics`]).
+    pub fn kinematics_only() -> Self {
+        Self {
+            dynamics: false,
+            spares: Vec::new(),
+        }
+    }
+
+    /// Runs `f` on a spare workspace for a model of `model`'s shape,
     /// allocated at its first use. The spare's kinematics cache is cleared
     /// before `f`: what it held for another robot is never reused, so `f`'s
     /// results do not depend on which robot used the spare before (every
     /// field a computation reads it writes first, as with a fresh `Data`).
     pub fn with<R>(&mut self, model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
-        let taken = take_fitting(&mut self.spares, model, true);
-        let (result, data) = lend(taken, model, true, f);
+        let taken = take_fitting(&mut self.spares, model, self.dynamics);
+        let (result, data) = lend(taken, model, self.dynamics, f);
         keep(&mut self.spares, data);
         result
     }
@@ -359,12 +368,6 @@ fn keep(spares: &mut Vec<Box<Data>>, data: Box<Data>) {
         spares.remove(0);
     }
     spares.push(data);
-}
-
-thread_local! {
-    /// Boxed as [`SpareData`]'s spares are.
-    #[allow(clippy::vec_box)]
-    static SPARE_KINEMATICS: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// How much of `data`'s kinematics is valid for `(model, q, v)`: 2 poses and

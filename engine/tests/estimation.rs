@@ -3,6 +3,7 @@
 //! simulated trot with the default sensor noise.
 
 use glam::{DMat3, DQuat, DVec3};
+use quadsim_engine::SpareData;
 use quadsim_engine::contact::{
     ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
 };
@@ -124,6 +125,7 @@ fn estimator_converges_to_a_standing_robot_on_noise_free_data() {
     let mut v0 = v.clone();
     v0[0] = 0.3;
     let mut est = BaseEstimator::new(&model, feet, EstimatorParams::default(), &q0, &v0, 0.0);
+    let mut spares = SpareData::kinematics_only();
     let accel = base_quat(&q).inverse() * -G;
     let nj = model.nv - 6;
     let dt = 0.01;
@@ -140,6 +142,7 @@ fn estimator_converges_to_a_standing_robot_on_noise_free_data() {
                 contacts: &[true; 4],
                 terrain: &terrain,
             },
+            &mut spares,
         );
     }
     let e = est.estimate;
@@ -189,6 +192,7 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
     };
     let feet = &points;
     let mut est = BaseEstimator::new(&model, feet, EstimatorParams::default(), &st.q, &st.v, 0.0);
+    let mut spares = SpareData::kinematics_only();
     let nj = model.nv - 6;
     let mut sensors = SensorSuite::new(config, 1234, nj, 4, 0.0);
     let mut ws = StepWorkspace::new(&model);
@@ -240,6 +244,7 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
                     contacts: &contacts,
                     terrain: &terrain,
                 },
+                &mut spares,
             );
             if t >= 0.5 {
                 let p = est.estimate.position_m;

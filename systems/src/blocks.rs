@@ -128,7 +128,7 @@ pub fn step_robot_pass(
                     for j in 0..steps {
                         let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
                         for sim in block.iter_mut().filter(|s| live(s)) {
-                            sense_robot(sim, t_s);
+                            sense_robot(sim, ws, t_s);
                         }
                         for sim in block.iter_mut().filter(|s| live(s)) {
                             control_stage(sim, ws, t_s, tick, control_dt_s);
@@ -153,7 +153,7 @@ pub fn step_robot_pass(
                 let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
                 pool.for_each(sims, |sim| {
                     if live(sim) {
-                        sense_robot(sim, t_s)
+                        workspaces.with(|ws| sense_robot(sim, ws, t_s))
                     }
                 });
                 pool.for_each(sims, |sim| {

@@ -12,7 +12,7 @@ use quadsim_engine::batch::{BatchData, LANES};
 /// robot's own data and hold nothing a result depends on from one use to
 /// the next, kept so that nothing is allocated once every model size has
 /// been met.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct WorkerWorkspace {
     /// The `Integrate` stage's lane workspaces (robots in SIMD lanes), one
     /// per model size met (sizes are all a [`BatchData`] depends on).
@@ -20,6 +20,19 @@ pub struct WorkerWorkspace {
     /// The `Control` stage's spare `Data` for a controller at the estimated
     /// state.
     pub(crate) spare_data: SpareData,
+    /// The `Sense` stage's kinematics-only spare for the base estimator's
+    /// leg kinematics (a robot whose legs do not run in lanes).
+    pub(crate) spare_kinematics: SpareData,
+}
+
+impl Default for WorkerWorkspace {
+    fn default() -> Self {
+        Self {
+            lanes: Vec::new(),
+            spare_data: SpareData::default(),
+            spare_kinematics: SpareData::kinematics_only(),
+        }
+    }
 }
 
 impl WorkerWorkspace {
