@@ -61,15 +61,23 @@ impl WorkerWorkspace {
 /// the pool may be shared, and its lock then serialises them).
 #[derive(Debug, Default)]
 pub struct WorkerWorkspaces {
-    slots: Vec<Mutex<WorkerWorkspace>>,
+    slots: Vec<Slot>,
 }
+
+/// One worker's workspace behind its lock, alone in its cache lines: two
+/// workers' locks in one line would bounce it between their cores at
+/// every block (false sharing; 128 bytes, as crossbeam's `CachePadded`
+/// on x86-64, whose prefetcher pulls lines in pairs).
+#[derive(Debug, Default)]
+#[repr(align(128))]
+struct Slot(Mutex<WorkerWorkspace>);
 
 impl WorkerWorkspaces {
     /// One workspace per worker of a pool of `workers` threads, and one for
     /// a thread outside it (kept when already so many).
     pub fn fit(&mut self, workers: usize) {
         if self.slots.len() != workers + 1 {
-            self.slots = (0..=workers).map(|_| Mutex::default()).collect();
+            self.slots = (0..=workers).map(|_| Slot::default()).collect();
         }
     }
 
@@ -80,7 +88,7 @@ impl WorkerWorkspaces {
     pub fn with<R>(&self, f: impl FnOnce(&mut WorkerWorkspace) -> R) -> R {
         let outside = self.slots.len() - 1;
         let i = rayon::current_thread_index().map_or(outside, |i| i.min(outside));
-        let mut ws = self.slots[i].lock().unwrap_or_else(|e| e.into_inner());
+        let mut ws = self.slots[i].0.lock().unwrap_or_else(|e| e.into_inner());
         f(&mut ws)
     }
 }
