@@ -2,8 +2,8 @@
 //! `docs/actuators.md` and `scenarios/README.md`).
 //!
 //! Resolution per joint: the kind (the joint's own `kind`, else the table's,
-//! else the model's default kind, [`default_kind`]), then the model's default set for that kind
-//! ([`model_defaults`]; other models: the joint's effort and velocity limits
+//! else the robot's default kind, [`default_kind`]), then the robot's default set for that kind
+//! ([`ActuatorDefaults`], which a built-in robot states; other robots: the joint's effort and velocity limits
 //! as stall torque and no-load speed), then the table's parameters, then the
 //! joint's overrides (`joints.NAME`: first the `*suffix` patterns, in name
 //! order, then the exact name, so the most specific entry wins).
@@ -11,7 +11,7 @@
 use std::collections::BTreeMap;
 
 use quadsim_engine::Model;
-use quadsim_engine::actuator_model::{ActuatorKind, ActuatorSpec, model_defaults};
+use quadsim_engine::actuator_model::{ActuatorDefaults, ActuatorKind, ActuatorSpec};
 
 use crate::scenario::format::ActuatorsSpec;
 use crate::scenario::spans::path_key;
@@ -119,21 +119,21 @@ fn matches(pattern: &str, name: &str) -> bool {
     }
 }
 
-/// The kind a joint gets when the scenario names none: `dc_motor` for
-/// quad16 (its default motors, `docs/actuators.md`), `ideal` for every other
-/// model, and `ideal` whenever the controller imposes the motion instead of
-/// commanding torques (`imposed_motion`: the prescribed controller's hybrid
-/// mode, Study B's way of walking quad12). quad16 walks at least as well on
-/// its motors as on ideal sources (`docs/actuators.md`, "Defaults").
-pub fn default_kind(model_name: &str, imposed_motion: bool) -> ActuatorKind {
-    if model_name == "quad16" && !imposed_motion {
-        ActuatorKind::DcMotor
-    } else {
-        ActuatorKind::Ideal
+/// The kind a joint gets when the scenario names none: the robot's default
+/// kind (`defaults`: quad16's DC motors, `docs/actuators.md`; quad12's ideal
+/// sources), `ideal` for a robot that states none, and `ideal` whenever the
+/// controller imposes the motion instead of commanding torques
+/// (`imposed_motion`: the prescribed controller's hybrid mode, Study B's way
+/// of walking quad12).
+pub fn default_kind(defaults: Option<&ActuatorDefaults>, imposed_motion: bool) -> ActuatorKind {
+    match defaults {
+        Some(d) if !imposed_motion => d.kind,
+        _ => ActuatorKind::Ideal,
     }
 }
 
-/// The actuator of each joint of `model` (built-in name `model_name`) from
+/// The actuator of each joint of `model` (its robot's default actuators
+/// `defaults`, [`quadsim_engine::robots::actuator_defaults`]) from
 /// the robot's `[robots.actuators]` at key path `p.actuators`, joints of no
 /// stated kind taking `default` ([`default_kind`]); `None` when every joint
 /// is ideal. Errors name the key path of the offending entry.
@@ -145,7 +145,7 @@ pub fn joint_actuators(
     loc: &Locator<'_>,
     p: &str,
     spec: &ActuatorsSpec,
-    model_name: &str,
+    defaults: Option<&ActuatorDefaults>,
     model: &Model,
     default: ActuatorKind,
 ) -> Result<Option<Vec<ActuatorSpec>>, ScenarioError> {
@@ -180,8 +180,10 @@ pub fn joint_actuators(
         let kind = mine.iter().rev().find_map(|o| o.2).unwrap_or(all_kind);
         let iv = model.base_nv() + j;
         let (effort, velocity) = (model.effort_limit[iv], model.velocity_limit[iv]);
-        let mut s = model_defaults(model_name, kind, effort, velocity)
-            .unwrap_or_else(|| ActuatorSpec::from_limits(kind, effort, velocity));
+        let mut s = defaults.map_or_else(
+            || ActuatorSpec::from_limits(kind, effort, velocity),
+            |d| d.spec(kind, effort, velocity),
+        );
         apply(&mut s, &spec.params);
         for o in &mine {
             apply(&mut s, o.3);

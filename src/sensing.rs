@@ -5,6 +5,7 @@ use quadsim_components::{RobotSensing, StateSource};
 use quadsim_engine::Model;
 use quadsim_engine::contact::ContactPoint;
 use quadsim_engine::estimation::{BaseEstimator, EstimatorParams};
+use quadsim_engine::robots;
 use quadsim_engine::sensors::noise::NoiseParams;
 use quadsim_engine::sensors::{JointVelocityMode, SensorConfig, SensorSuite};
 
@@ -41,7 +42,7 @@ fn check(
 
 /// The sensor configuration of robot `r` (key path `p`, total mass
 /// `total_mass_kg`: a robot that is not built in gets foot sensors sized to
-/// it, [`SensorConfig::defaults_for_robot`]), or `None` for `preset = "none"`.
+/// it, [`robots::default_sensors`]), or `None` for `preset = "none"`.
 pub fn sensor_config(
     loc: &Locator<'_>,
     p: &str,
@@ -54,9 +55,12 @@ pub fn sensor_config(
     check(loc, &format!("{sp}.rate_hz"), s.rate_hz, true)?;
     let rate = s.rate_hz.unwrap_or(controller_rate_hz);
     let mut cfg = match s.preset.as_deref().unwrap_or("default") {
-        "default" => SensorConfig::defaults_for_robot(&r.model, total_mass_kg, rate),
+        "default" => {
+            SensorConfig::from_spec(&robots::default_sensors(&r.model, total_mass_kg), rate)
+        }
         "ideal" => {
-            let d = SensorConfig::defaults_for_robot(&r.model, total_mass_kg, rate);
+            let d =
+                SensorConfig::from_spec(&robots::default_sensors(&r.model, total_mass_kg), rate);
             SensorConfig {
                 imu: d
                     .imu

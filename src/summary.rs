@@ -685,8 +685,8 @@ impl RobotSummary {
             && c.sim_hip.samples > 0
         {
             let joint =
-                |m: &quadsim_engine::legs::study_b_dynamics::TorqueStats,
-                 s: &quadsim_engine::legs::study_b_dynamics::TorqueStats| {
+                |m: &quadsim_validation::study_b_dynamics::TorqueStats,
+                 s: &quadsim_validation::study_b_dynamics::TorqueStats| {
                     StudyBJoint {
                         model_peak_nm: m.peak_nm,
                         model_mean_nm: m.mean_abs_nm,

@@ -22,12 +22,13 @@ use quadsim_engine::control::walker::{Planner, Walker, WalkerParams};
 use quadsim_engine::description::{RobotDescription, Shape};
 use quadsim_engine::gait::{Gait, GaitKind};
 use quadsim_engine::integrate::{Integrator, State};
-use quadsim_engine::legs::study_b_dynamics::StudyBTorqueComparison;
 use quadsim_engine::metrics::MetricsAccumulator;
 use quadsim_engine::model::BaseKind;
+use quadsim_engine::robots::SourceStudy;
 use quadsim_engine::terrain::{DefaultGround, Terrain as _, TerrainUnion};
 use quadsim_engine::{Data, Model, robots};
 use quadsim_systems::Simulation;
+use quadsim_validation::study_b_dynamics::StudyBTorqueComparison;
 
 use crate::scenario::format::IntegratorSpec;
 use crate::scenario::spans::path_key;
@@ -359,13 +360,14 @@ fn build(scn: &Scenario, ov: Overrides, loc: Locator<'_>) -> Result<World, Scena
             .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
         let imposed_motion = matches!(&controller, Controller::Prescribed(pc)
             if pc.controller.params.mode == PrescribedMode::Hybrid);
+        let actuator_defaults = robots::actuator_defaults(&r.model);
         let actuators = crate::actuators::joint_actuators(
             &loc,
             &p,
             &r.actuators,
-            &r.model,
+            actuator_defaults.as_ref(),
             &model,
-            crate::actuators::default_kind(&r.model, imposed_motion),
+            crate::actuators::default_kind(actuator_defaults.as_ref(), imposed_motion),
         )?;
         if let Some(specs) = &actuators {
             if imposed_motion {
@@ -1016,9 +1018,9 @@ fn controller(
             let hybrid = pp.mode == PrescribedMode::Hybrid;
             let ctl = Prescribed::new(desc, model, pp, q)
                 .map_err(|e| loc.at(&format!("{p}.model"), e.to_string()))?;
-            // Study B's Table 4 comparison: its leg model is quad12's leg
-            let study_b =
-                (hybrid && desc.name == robots::quad12::NAME).then(StudyBTorqueComparison::default);
+            // Study B's Table 4 comparison: its leg model is Study B's robot's leg
+            let study_b = (hybrid && robots::source_study(&desc.name) == Some(SourceStudy::B))
+                .then(StudyBTorqueComparison::default);
             Ok(Controller::Prescribed(Box::new(PrescribedRun {
                 controller: ctl,
                 study_b,

@@ -403,7 +403,10 @@ fn friction_noise_and_start_reach_the_copy() {
     assert_eq!(r.start_xy_m, Some([d.start_dx_m, d.start_dy_m]));
     assert_eq!(r.start_yaw_deg, d.start_dyaw_deg);
     // quad16's default IMU figures, scaled
-    let cfg = quadsim::engine::sensors::SensorConfig::defaults_for("quad16", 500.0);
+    let cfg = quadsim::engine::sensors::SensorConfig::from_spec(
+        &quadsim::engine::robots::quad16::SENSORS,
+        500.0,
+    );
     let imu = r.sensors.imu.as_ref().expect("scaled IMU figures written");
     let gyro = cfg.imu.unwrap().gyro.white_std;
     assert!(gyro > 0.0);

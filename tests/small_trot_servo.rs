@@ -14,7 +14,7 @@ use quadsim::report::actuators::actuator_capacity;
 use quadsim::scenario::{load_scenario, parse_scenario};
 use quadsim::summary::robot_json;
 use quadsim::world::{Overrides, World, build_world};
-use quadsim_engine::actuator_model::{S3003_NO_LOAD_SPEED_RADPS, S3003_STALL_TORQUE_NM};
+use quadsim_engine::robots::quad12::{S3003_NO_LOAD_SPEED_RADPS, S3003_STALL_TORQUE_NM};
 use serde_json::Value;
 
 const FILE: &str = "scenarios/small_trot_servo.toml";

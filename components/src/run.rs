@@ -7,9 +7,9 @@ use quadsim_engine::control::joint_pd::JointPd;
 use quadsim_engine::control::prescribed::Prescribed;
 use quadsim_engine::control::vmc::VmcCommand;
 use quadsim_engine::control::walker::Walker;
-use quadsim_engine::legs::study_b_dynamics::StudyBTorqueComparison;
 use quadsim_engine::metrics::{FootSample, MetricsAccumulator};
 use quadsim_engine::spatial::Transform;
+use quadsim_validation::study_b_dynamics::StudyBTorqueComparison;
 
 /// How a robot's actuators are commanded (written by the `Control` stage at
 /// the controller rate and held between controller ticks).
@@ -36,7 +36,7 @@ pub struct PrescribedRun {
     pub controller: Prescribed,
     /// Study B's Table 4 comparison, accumulated every
     /// `sample_every_steps` steps once the trajectory's ramp is over
-    /// (hybrid mode on quad12 only; `None` otherwise).
+    /// (hybrid mode on Study B's robot only; `None` otherwise).
     pub study_b: Option<StudyBTorqueComparison>,
     /// Steps between samples of the comparison (the controller rate).
     pub sample_every_steps: u64,
@@ -56,7 +56,7 @@ impl PrescribedRun {
             && due
             && c.reference_time_s() > c.params.trot.ramp_s
         {
-            c.sample_study_b(model, tau_joints, cmp);
+            cmp.sample(c, model, tau_joints);
         }
     }
 }

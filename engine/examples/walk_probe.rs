@@ -33,7 +33,7 @@
 //! which a loaded stance foot (load > 0.5) had no contact.
 use glam::{DVec2, DVec3};
 use quadsim_engine::actuator_model::{
-    ActuatorBank, ActuatorKind, ActuatorSpec, add_reflected_inertia, model_defaults,
+    ActuatorBank, ActuatorKind, ActuatorSpec, add_reflected_inertia,
 };
 use quadsim_engine::contact::{
     ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
@@ -219,13 +219,13 @@ fn main() {
         let nv0 = model.base_nv();
         let specs: Vec<ActuatorSpec> = (nv0..model.nv)
             .map(|j| {
-                model_defaults(
-                    &robot,
-                    ActuatorKind::DcMotor,
-                    model.effort_limit[j],
-                    model.velocity_limit[j],
-                )
-                .unwrap()
+                quadsim_engine::robots::actuator_defaults(&robot)
+                    .unwrap()
+                    .spec(
+                        ActuatorKind::DcMotor,
+                        model.effort_limit[j],
+                        model.velocity_limit[j],
+                    )
             })
             .collect();
         add_reflected_inertia(&mut model, &specs);

@@ -494,88 +494,87 @@ impl ActuatorBank {
 /// motor's no-load speed: a motor is rated below its no-load speed.
 pub const RATED_OVER_NO_LOAD_SPEED: f64 = 0.75;
 
-/// The default actuator of a joint of a built-in model for a kind, given
-/// the joint's effort and velocity limits (`docs/actuators.md` gives the
-/// sources and assumptions); `None` for other models, whose motors take
-/// their stall torque and no-load speed from the joints' limits
-/// ([`ActuatorSpec::from_limits`]).
-///
-/// Every default DC motor stalls at the joint's effort limit and runs
-/// free at its velocity limit / [`RATED_OVER_NO_LOAD_SPEED`] (quad16:
-/// 100 N·m, 40 rad/s; quad12: 3 N·m, 8 rad/s, unless the model's
-/// `actuator.*` parameters change the limits).
-///
-/// - `quad16`, DC motor: N = 10 with a 1·10⁻⁴ kg·m² rotor (reflected
-///   0.01 kg·m²), 0.1 N·m·s/rad viscous and 0.5 N·m Coulomb friction,
-///   100 Hz torque bandwidth, no latency. Servo: the same motor under a
-///   1 kHz PD of 300 N·m/rad and 5 N·m·s/rad.
-/// - `quad12`, DC motor: a hobby servo's motor and gear train, N = 250 with
-///   a 5·10⁻⁸ kg·m² rotor (reflected 3.1·10⁻³ kg·m²), 0.02 N·m Coulomb
-///   friction, 200 Hz bandwidth, no latency. Servo: Study B's Futaba S3003
-///   at 6 V whatever the joint's limits: τ_s = 0.3 N·m, ω₀ = 60°/0.19 s =
-///   5.51 rad/s, the same gear train, a 300 Hz PD of 1.72 N·m/rad (full
-///   torque at 10° of error) and 0.05 N·m·s/rad.
-pub fn model_defaults(
-    model_name: &str,
-    kind: ActuatorKind,
-    effort_limit: f64,
-    velocity_limit: f64,
-) -> Option<ActuatorSpec> {
-    let no_load = velocity_limit / RATED_OVER_NO_LOAD_SPEED;
-    let quad16 = MotorParams {
-        stall_torque_nm: effort_limit,
-        no_load_speed_radps: no_load,
-        gear_ratio: 10.0,
-        rotor_inertia_kgm2: 1e-4,
-        viscous_nms_per_rad: 0.1,
-        coulomb_nm: 0.5,
-        bandwidth_hz: 100.0,
-        latency_ticks: 0,
-    };
-    let quad12 = MotorParams {
-        stall_torque_nm: effort_limit,
-        no_load_speed_radps: no_load,
-        gear_ratio: 250.0,
-        rotor_inertia_kgm2: 5e-8,
-        viscous_nms_per_rad: 0.0,
-        coulomb_nm: 0.02,
-        bandwidth_hz: 200.0,
-        latency_ticks: 0,
-    };
-    Some(match (model_name, kind) {
-        (_, ActuatorKind::Ideal) => ActuatorSpec::ideal(),
-        ("quad16", ActuatorKind::DcMotor) => ActuatorSpec::dc_motor(quad16),
-        ("quad16", ActuatorKind::Servo) => ActuatorSpec::servo(
-            quad16,
-            ServoParams {
-                kp_nm_per_rad: 300.0,
-                kd_nms_per_rad: 5.0,
-                rate_hz: 1000.0,
-            },
-        ),
-        ("quad12", ActuatorKind::DcMotor) => ActuatorSpec::dc_motor(quad12),
-        ("quad12", ActuatorKind::Servo) => ActuatorSpec::servo(
-            MotorParams {
-                stall_torque_nm: S3003_STALL_TORQUE_NM,
-                no_load_speed_radps: S3003_NO_LOAD_SPEED_RADPS,
-                ..quad12
-            },
-            ServoParams {
-                kp_nm_per_rad: S3003_STALL_TORQUE_NM / 10f64.to_radians(),
-                kd_nms_per_rad: 0.05,
-                rate_hz: 300.0,
-            },
-        ),
-        _ => return None,
-    })
+/// A motor's gear train and losses: the figures of [`MotorParams`] beside
+/// its stall torque and no-load speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotorGear {
+    /// Gear ratio N (motor turns per joint turn).
+    pub gear_ratio: f64,
+    /// Rotor inertia at the motor (kg·m²).
+    pub rotor_inertia_kgm2: f64,
+    /// Viscous friction at the joint (N·m·s/rad).
+    pub viscous_nms_per_rad: f64,
+    /// Coulomb friction at the joint (N·m).
+    pub coulomb_nm: f64,
+    /// Torque bandwidth (Hz).
+    pub bandwidth_hz: f64,
+    /// Latency (control ticks).
+    pub latency_ticks: usize,
 }
 
-/// Futaba S3003 stall torque (N·m): Study B's 300 N·mm at 6 V (the figure
-/// its knee is sized against; see `docs/actuators.md` for the datasheet's).
-pub const S3003_STALL_TORQUE_NM: f64 = 0.3;
-/// Futaba S3003 no-load speed at 6 V (rad/s): 0.19 s per 60° (datasheet;
-/// 0.23 s per 60° at 4.8 V).
-pub const S3003_NO_LOAD_SPEED_RADPS: f64 = std::f64::consts::FRAC_PI_3 / 0.19;
+/// A motor's rating at the joint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotorRating {
+    /// Stall torque (N·m).
+    pub stall_torque_nm: f64,
+    /// No-load speed (rad/s).
+    pub no_load_speed_radps: f64,
+}
+
+/// A robot's default actuators (`docs/actuators.md` gives the sources and
+/// assumptions): the kind a joint gets when the scenario names none, and
+/// the figures of each kind beside the joint's limits. A robot states its
+/// own (`robots::quad16::ACTUATORS`, `robots::quad12::ACTUATORS`); a robot
+/// without them gets motors whose stall torque and no-load speed are the
+/// joints' limits ([`ActuatorSpec::from_limits`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActuatorDefaults {
+    /// The kind of a joint whose scenario names none, when the controller
+    /// commands torques (an imposed motion takes ideal sources).
+    pub kind: ActuatorKind,
+    /// The DC motor's gear train and losses. It stalls at the joint's effort
+    /// limit and runs free at its velocity limit /
+    /// [`RATED_OVER_NO_LOAD_SPEED`].
+    pub gear: MotorGear,
+    /// The servo's motor rating; `None`: the DC motor's, from the joint's
+    /// limits.
+    pub servo_rating: Option<MotorRating>,
+    /// The servo's internal PD.
+    pub servo: ServoParams,
+}
+
+impl ActuatorDefaults {
+    /// The default actuator of kind `kind` of a joint with these effort and
+    /// velocity limits.
+    pub fn spec(&self, kind: ActuatorKind, effort_limit: f64, velocity_limit: f64) -> ActuatorSpec {
+        let g = &self.gear;
+        let motor = MotorParams {
+            stall_torque_nm: effort_limit,
+            no_load_speed_radps: velocity_limit / RATED_OVER_NO_LOAD_SPEED,
+            gear_ratio: g.gear_ratio,
+            rotor_inertia_kgm2: g.rotor_inertia_kgm2,
+            viscous_nms_per_rad: g.viscous_nms_per_rad,
+            coulomb_nm: g.coulomb_nm,
+            bandwidth_hz: g.bandwidth_hz,
+            latency_ticks: g.latency_ticks,
+        };
+        match kind {
+            ActuatorKind::Ideal => ActuatorSpec::ideal(),
+            ActuatorKind::DcMotor => ActuatorSpec::dc_motor(motor),
+            ActuatorKind::Servo => ActuatorSpec::servo(
+                match self.servo_rating {
+                    Some(r) => MotorParams {
+                        stall_torque_nm: r.stall_torque_nm,
+                        no_load_speed_radps: r.no_load_speed_radps,
+                        ..motor
+                    },
+                    None => motor,
+                },
+                self.servo,
+            ),
+        }
+    }
+}
 
 impl ActuatorSpec {
     /// A motor of this kind whose stall torque and no-load speed are a

@@ -147,61 +147,6 @@ impl Data {
         }
     }
 
-    /// Runs `f` on this thread's spare full workspace for a model of
-    /// `model`'s shape (bodies, nq, nv), allocated at its first use on the
-    /// thread. For a second kinematic state beside a robot's own `Data` (a
-    /// controller at the estimated state), so that the robot's kinematics at
-    /// the true state survive for the stages after it instead of being
-    /// recomputed. The spare's kinematics cache is cleared before `f`: what it
-    /// held for another robot is never reused, so `f`'s results do not depend
-    /// on which thread or robot used the spare before (every field a
-    /// computation reads it writes first, as with a fresh `Data`).
-    pub fn with_spare<R>(model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
-        Self::with_pooled(&SPARE_DATA, model, true, f)
-    }
-
-    /// [`Self::with_spare`] for a kinematics-only workspace
-    /// ([`Self::for_kinematics`]): a state estimator's leg kinematics, which
-    /// nothing reads after the update that computes them, so that they need
-    /// not live (and be fetched from memory) in every robot.
-    pub fn with_kinematics_spare<R>(model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
-        Self::with_pooled(&SPARE_KINEMATICS, model, false, f)
-    }
-
-    /// A spare of `pool` (full workspaces when `dynamics`, else
-    /// kinematics-only) fitted to `model`, its cache cleared, lent to `f`.
-    #[allow(clippy::vec_box)] // boxed spares: lending one moves a pointer
-    fn with_pooled<R>(
-        pool: &'static std::thread::LocalKey<std::cell::RefCell<Vec<Box<Data>>>>,
-        model: &Model,
-        dynamics: bool,
-        f: impl FnOnce(&mut Data) -> R,
-    ) -> R {
-        let taken = pool.with(|cell| {
-            let mut spares = cell.borrow_mut();
-            let i = spares.iter().position(|d| d.fits_as(model, dynamics))?;
-            Some(spares.swap_remove(i))
-        });
-        let mut data = taken.unwrap_or_else(|| {
-            Box::new(if dynamics {
-                Data::new(model)
-            } else {
-                Data::for_kinematics(model)
-            })
-        });
-        data.invalidate_kinematics();
-        let result = f(&mut data);
-        pool.with(|cell| {
-            let mut spares = cell.borrow_mut();
-            // one per shape in use; a thread that meets many shapes keeps the latest
-            if spares.len() >= MAX_SPARES {
-                spares.remove(0);
-            }
-            spares.push(data);
-        });
-        result
-    }
-
     /// Whether this is a workspace sized for `model`: a full one when
     /// `dynamics`, else a kinematics-only one.
     fn fits_as(&self, model: &Model, dynamics: bool) -> bool {
@@ -332,21 +277,97 @@ impl Data {
     }
 }
 
-/// Most spare workspaces ([`Data::with_spare`]) a thread keeps.
+/// Most spare workspaces a [`SpareData`] keeps.
 const MAX_SPARES: usize = 8;
 
-thread_local! {
+/// Spare workspaces ([`Data`]), one per model shape (bodies, nq, nv) in
+/// use, lent by [`SpareData::with`]. Full ones ([`SpareData::default`]): for
+/// a second kinematic state beside a robot's own `Data` (a controller at the
+/// estimated state), so that the robot's kinematics at the true state
+/// survive for the stages after it instead of being recomputed.
+/// Kinematics-only ones ([`SpareData::kinematics_only`],
+/// [`Data::for_kinematics`]): a state estimator's leg kinematics, which
+/// nothing reads after the update that computes them, so that they need not
+/// live (and be fetched from memory) in every robot. A value owned by
+/// whatever steps the robots, one per worker (`systems`'
+/// `WorkerWorkspace`), and passed explicitly: it holds nothing a result
+/// depends on from one loan to the next.
+#[derive(Debug)]
+pub struct SpareData {
+    /// Full workspaces ([`Data::new`]), else kinematics-only ones.
+    dynamics: bool,
     /// Boxed: taking one out and putting it back moves a pointer, not the
     /// `Data` (about 700 bytes of vector headers and the base's subspace,
     /// copied twice per control tick).
     #[allow(clippy::vec_box)]
-    static SPARE_DATA: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
+    spares: Vec<Box<Data>>,
 }
 
-thread_local! {
-    /// Boxed as [`SPARE_DATA`] is.
-    #[allow(clippy::vec_box)]
-    static SPARE_KINEMATICS: std::cell::RefCell<Vec<Box<Data>>> = const { std::cell::RefCell::new(Vec::new()) };
+impl Default for SpareData {
+    /// A pool of full workspaces.
+    fn default() -> Self {
+        Self {
+            dynamics: true,
+            spares: Vec::new(),
+        }
+    }
+}
+
+impl SpareData {
+    /// A pool of kinematics-only workspaces ([`Data::for_kinematics`]).
+    pub fn kinematics_only() -> Self {
+        Self {
+            dynamics: false,
+            spares: Vec::new(),
+        }
+    }
+
+    /// Runs `f` on a spare workspace for a model of `model`'s shape,
+    /// allocated at its first use. The spare's kinematics cache is cleared
+    /// before `f`: what it held for another robot is never reused, so `f`'s
+    /// results do not depend on which robot used the spare before (every
+    /// field a computation reads it writes first, as with a fresh `Data`).
+    pub fn with<R>(&mut self, model: &Model, f: impl FnOnce(&mut Data) -> R) -> R {
+        let taken = take_fitting(&mut self.spares, model, self.dynamics);
+        let (result, data) = lend(taken, model, self.dynamics, f);
+        keep(&mut self.spares, data);
+        result
+    }
+}
+
+/// Takes out of `spares` one that fits `model` (full when `dynamics`).
+#[allow(clippy::vec_box)] // boxed spares: lending one moves a pointer
+fn take_fitting(spares: &mut Vec<Box<Data>>, model: &Model, dynamics: bool) -> Option<Box<Data>> {
+    let i = spares.iter().position(|d| d.fits_as(model, dynamics))?;
+    Some(spares.swap_remove(i))
+}
+
+/// `taken` (or a new workspace for `model`), its cache cleared, lent to `f`.
+fn lend<R>(
+    taken: Option<Box<Data>>,
+    model: &Model,
+    dynamics: bool,
+    f: impl FnOnce(&mut Data) -> R,
+) -> (R, Box<Data>) {
+    let mut data = taken.unwrap_or_else(|| {
+        Box::new(if dynamics {
+            Data::new(model)
+        } else {
+            Data::for_kinematics(model)
+        })
+    });
+    data.invalidate_kinematics();
+    (f(&mut data), data)
+}
+
+/// Puts `data` back among `spares`: one per shape in use; a pool that meets
+/// many shapes keeps the latest.
+#[allow(clippy::vec_box)] // boxed spares: lending one moves a pointer
+fn keep(spares: &mut Vec<Box<Data>>, data: Box<Data>) {
+    if spares.len() >= MAX_SPARES {
+        spares.remove(0);
+    }
+    spares.push(data);
 }
 
 /// How much of `data`'s kinematics is valid for `(model, q, v)`: 2 poses and
@@ -433,19 +454,24 @@ mod tests {
         let v: Vec<f64> = (0..light.nv).map(|i| (i as f64 * 0.3).cos()).collect();
         let a: Vec<f64> = (0..light.nv).map(|i| (i as f64 * 0.5).sin()).collect();
         let fresh = |m: &Model| rnea(m, &mut Data::new(m), &q, &v, &a).to_vec();
-        let spare = |m: &Model| Data::with_spare(m, |d| rnea(m, d, &q, &v, &a).to_vec());
+        let spare =
+            |pool: &mut SpareData, m: &Model| pool.with(m, |d| rnea(m, d, &q, &v, &a).to_vec());
         assert_ne!(fresh(&light), fresh(&heavy), "the two models differ");
+        let mut spares = SpareData::default();
         let q12 = nominal_q("quad12").unwrap();
-        Data::with_spare(&quad12, |d| {
+        spares.with(&quad12, |d| {
             forward_kinematics(&quad12, d, &q12, &vec![0.0; quad12.nv])
         });
         for m in [&light, &heavy, &light] {
-            assert_eq!(spare(m), fresh(m));
+            assert_eq!(spare(&mut spares, m), fresh(m));
         }
-        Data::with_spare(&light, |outer| {
+        // a spare lent while another pool's is out is another workspace (one
+        // pool cannot lend twice at once: it is borrowed while lending)
+        let mut other = SpareData::default();
+        other.with(&light, |outer| {
             rnea(&light, outer, &q, &v, &a);
             assert_eq!(
-                spare(&heavy),
+                spare(&mut spares, &heavy),
                 fresh(&heavy),
                 "a nested spare is another workspace"
             );

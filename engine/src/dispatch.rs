@@ -86,7 +86,7 @@ pub fn forward_kinematics(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) 
 
 /// [`forward_kinematics`] without recording `(q, v)` as the state `data`
 /// holds: a later call computes again. For a workspace nothing reads
-/// afterwards (the estimator's per-thread spare), the two copies of the
+/// afterwards (the estimator's kinematics-only spare), the two copies of the
 /// state are saved.
 pub fn forward_kinematics_unrecorded(model: &Model, data: &mut Data, q: &[f64], v: &[f64]) {
     debug_assert_eq!(q.len(), model.nq);

@@ -59,5 +59,5 @@ pub mod terrain;
 pub mod trig;
 pub mod workspace;
 
-pub use data::Data;
+pub use data::{Data, SpareData};
 pub use model::{BaseKind, Model, ModelError};

@@ -3,6 +3,7 @@
 //! simulated trot with the default sensor noise.
 
 use glam::{DMat3, DQuat, DVec3};
+use quadsim_engine::SpareData;
 use quadsim_engine::contact::{
     ContactForces, ContactPoint, ContactState, GroundMaterial, update_after_step,
 };
@@ -124,6 +125,7 @@ fn estimator_converges_to_a_standing_robot_on_noise_free_data() {
     let mut v0 = v.clone();
     v0[0] = 0.3;
     let mut est = BaseEstimator::new(&model, feet, EstimatorParams::default(), &q0, &v0, 0.0);
+    let mut spares = SpareData::kinematics_only();
     let accel = base_quat(&q).inverse() * -G;
     let nj = model.nv - 6;
     let dt = 0.01;
@@ -140,6 +142,7 @@ fn estimator_converges_to_a_standing_robot_on_noise_free_data() {
                 contacts: &[true; 4],
                 terrain: &terrain,
             },
+            &mut spares,
         );
     }
     let e = est.estimate;
@@ -189,6 +192,7 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
     };
     let feet = &points;
     let mut est = BaseEstimator::new(&model, feet, EstimatorParams::default(), &st.q, &st.v, 0.0);
+    let mut spares = SpareData::kinematics_only();
     let nj = model.nv - 6;
     let mut sensors = SensorSuite::new(config, 1234, nj, 4, 0.0);
     let mut ws = StepWorkspace::new(&model);
@@ -240,6 +244,7 @@ fn trot(config: &SensorConfig, forward_mps: f64, duration_s: f64, closed_loop: b
                     contacts: &contacts,
                     terrain: &terrain,
                 },
+                &mut spares,
             );
             if t >= 0.5 {
                 let p = est.estimate.position_m;
@@ -374,7 +379,7 @@ fn estimator_follows_a_trot_with_ideal_sensors() {
 #[test]
 fn estimator_follows_a_trot_with_default_noise() {
     let r = trot(
-        &SensorConfig::defaults_for("quad16", 500.0),
+        &SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0),
         0.5,
         10.0,
         false,
@@ -389,7 +394,7 @@ fn estimator_follows_a_trot_with_default_noise() {
 #[test]
 fn walker_trots_on_the_estimate_with_default_noise() {
     let r = trot(
-        &SensorConfig::defaults_for("quad16", 500.0),
+        &SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0),
         0.5,
         10.0,
         true,
@@ -413,7 +418,7 @@ fn walker_trots_on_the_estimate_with_default_noise() {
 /// same run's error without mocap.
 #[test]
 fn fused_motion_capture_removes_the_drift() {
-    let mut config = SensorConfig::defaults_for("quad16", 500.0);
+    let mut config = SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0);
     if let Some(imu) = config.imu.as_mut() {
         imu.gyro.bias_std = 0.01;
     }

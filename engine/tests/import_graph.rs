@@ -23,6 +23,45 @@ fn engine_files_import_each_other_in_no_circle() {
     assert!(circles.is_empty(), "{} import circles", circles.len());
 }
 
+/// Study B's validation code lives in `validation/` (quadsim-validation),
+/// beside the tests, not in the engine's core: the engine neither depends on
+/// that crate (so it cannot import it: Cargo has no dependency cycles) nor
+/// names it, and the Study B files are no longer among its sources.
+#[test]
+fn engine_does_not_import_the_validation_crate() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let manifest = std::fs::read_to_string(root.join("Cargo.toml")).unwrap();
+    assert!(
+        !manifest.contains("quadsim-validation") && !manifest.contains("quadsim_validation"),
+        "engine/Cargo.toml names the validation crate"
+    );
+    let graph = import_graph::file_graph(&root.join("src"));
+    assert!(
+        !graph.keys().any(|f| f.contains("study_b")),
+        "Study B's files are back in the engine: {:?}",
+        graph
+            .keys()
+            .filter(|f| f.contains("study_b"))
+            .collect::<Vec<_>>()
+    );
+    let mut stack = vec![root.join("src")];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let path = e.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|x| x == "rs") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                assert!(
+                    !text.contains("quadsim_validation"),
+                    "{} names the validation crate",
+                    path.display()
+                );
+            }
+        }
+    }
+}
+
 /// The reader itself: a small crate with a known circle and a known
 /// acyclic rest, so that the test above could fail.
 #[test]

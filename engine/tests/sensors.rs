@@ -450,7 +450,7 @@ fn encoders_quantise_and_difference_velocity_through_the_filter() {
 
 #[test]
 fn sensor_streams_follow_the_seed_only() {
-    let cfg = SensorConfig::defaults_for("quad16", 500.0);
+    let cfg = SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, 500.0);
     let q = [0.1; 16];
     let qd = [0.2; 16];
     let f = [100.0; 4];
@@ -504,7 +504,7 @@ fn sensor_streams_follow_the_seed_only() {
 #[test]
 fn due_predicts_a_sample_without_taking_it() {
     for rate_hz in [500.0, 333.0, 2000.0] {
-        let mut cfg = SensorConfig::defaults_for("quad16", rate_hz);
+        let mut cfg = SensorConfig::from_spec(&quadsim_engine::robots::quad16::SENSORS, rate_hz);
         cfg.mocap = Some(SensorConfig::default_mocap());
         let mut s = SensorSuite::new(&cfg, 7, 16, 4, 0.0);
         let (q, qd, f) = ([0.1; 16], [0.2; 16], [100.0; 4]);

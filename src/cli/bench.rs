@@ -155,6 +155,35 @@ impl BenchSensing {
     }
 }
 
+/// What a benchmark robot does: the herd scenario's two halves
+/// (`scenarios/herd.toml`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum BenchWorkload {
+    /// Trotting at 0.5 m/s under VMC.
+    Trot,
+    /// Standing under joint PD.
+    Stand,
+}
+
+/// The models `quadsim bench` runs and what each does: quad16 trots,
+/// quad12 stands (it does not trot under VMC yet).
+const BENCH_MODELS: &[(&str, BenchWorkload)] = &[
+    ("quad16", BenchWorkload::Trot),
+    ("quad12", BenchWorkload::Stand),
+];
+
+/// The workload of `--model`.
+fn workload(model: &str) -> Result<BenchWorkload, CliError> {
+    BENCH_MODELS
+        .iter()
+        .find(|(m, _)| *m == model)
+        .map(|&(_, w)| w)
+        .ok_or_else(|| {
+            let names: Vec<&str> = BENCH_MODELS.iter().map(|(m, _)| *m).collect();
+            bad(format!("--model {model}: expected {}", names.join(" or ")))
+        })
+}
+
 /// The scenario of one configuration. quad16 runs on ideal torque sources
 /// (not its default DC motors), like MuJoCo's `motor` actuators in the
 /// side-by-side model, so the figures compare with it and with earlier runs.
@@ -183,20 +212,17 @@ pub fn bench_scenario_with(
     planner: BenchPlanner,
 ) -> Result<String, CliError> {
     let mpc = planner == BenchPlanner::Mpc;
-    let controller = match (model, whole_body || mpc) {
-        ("quad16", true) if mpc => {
+    let controller = match (workload(model)?, whole_body || mpc) {
+        (BenchWorkload::Trot, true) if mpc => {
             "kind = \"vmc\"\nplanner = \"mpc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
         }
-        ("quad16", false) => {
+        (BenchWorkload::Trot, false) => {
             "kind = \"vmc\"\nwhole_body = false\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
         }
-        ("quad16", true) => {
+        (BenchWorkload::Trot, true) => {
             "kind = \"vmc\"\nv_x_mps = 0.5\n[herds.robot.actuators]\nkind = \"ideal\""
         }
-        ("quad12", _) => "kind = \"joint_pd\"",
-        (other, _) => {
-            return Err(bad(format!("--model {other}: expected quad16 or quad12")));
-        }
+        (BenchWorkload::Stand, _) => "kind = \"joint_pd\"",
     };
     let mut s = String::from(
         "format_version = 1\n[world]\nname = \"bench\"\ndt_s = 0.0005\nduration_s = 1.0\n\
@@ -449,14 +475,15 @@ pub fn run(mut a: BenchArgs) -> Result<(), CliError> {
     println!(
         "{} ({}; controller on the {} state), dt 0.5 ms, median of {} blocks of {} steps after {} warm-up steps",
         a.model,
-        if a.model == "quad16" && a.planner == BenchPlanner::Mpc {
-            "trotting at 0.5 m/s under MPC and the whole-body layer"
-        } else if a.model == "quad16" && a.whole_body {
-            "trotting at 0.5 m/s under VMC and the whole-body layer"
-        } else if a.model == "quad16" {
-            "trotting at 0.5 m/s under VMC, Study A's τ = Jᵀ f"
-        } else {
-            "standing under joint PD"
+        match workload(&a.model)? {
+            BenchWorkload::Trot if a.planner == BenchPlanner::Mpc => {
+                "trotting at 0.5 m/s under MPC and the whole-body layer"
+            }
+            BenchWorkload::Trot if a.whole_body => {
+                "trotting at 0.5 m/s under VMC and the whole-body layer"
+            }
+            BenchWorkload::Trot => "trotting at 0.5 m/s under VMC, Study A's τ = Jᵀ f",
+            BenchWorkload::Stand => "standing under joint PD",
         },
         match a.sensing {
             BenchSensing::Estimated => "estimated",

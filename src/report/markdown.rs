@@ -6,6 +6,7 @@
 
 use std::fmt::Write as _;
 
+use quadsim_engine::robots::SourceStudy;
 use serde_json::Value;
 
 use super::input::{ReportInput, robot_info};
@@ -853,10 +854,10 @@ fn render(
         let _ = writeln!(out, "### `{n}` ({})\n", info.model);
         let mut notes = Notes::default();
         let mut body = String::new();
-        match info.model.as_str() {
-            "quad16" => study_a(&mut body, r, &mut notes, &info.speed_command),
-            "quad12" => study_b(&mut body, r, &mut notes),
-            _ => {
+        match quadsim_engine::robots::source_study(&info.model) {
+            Some(SourceStudy::A) => study_a(&mut body, r, &mut notes, &info.speed_command),
+            Some(SourceStudy::B) => study_b(&mut body, r, &mut notes),
+            None => {
                 let _ = writeln!(
                     body,
                     "Neither study's robot (Study A is `quad16`, Study B `quad12`): no rows."

@@ -1,7 +1,7 @@
 //! `[robots.sensors]` and `[robots.estimator]`: a robot's sensors and base
 //! state estimator (documented in `scenarios/README.md` and `docs/sensors.md`).
-//! Every number left out takes the robot model's default
-//! (`SensorConfig::defaults_for`).
+//! Every number left out takes the robot's default (`robots::default_sensors`,
+//! built by `SensorConfig::from_spec`).
 
 use schemars::JsonSchema;
 use serde::Deserialize;

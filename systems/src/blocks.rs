@@ -23,6 +23,7 @@ use crate::control::{clock_dt, control_stage, is_control_tick};
 use crate::metrics::{check_divergence, record_robot};
 use crate::sense::sense_robot;
 use crate::step::{count_step, for_each_lane_group, lanes_on, live, plan_groups, step_group};
+use crate::workspace::WorkerWorkspaces;
 
 /// How many consecutive steps one run of the step schedule takes every robot
 /// through (at least 1; absent means 1). [`Simulation::run`](crate::Simulation::run)
@@ -105,6 +106,7 @@ pub fn step_robot_pass(
     pass: Option<Res<PassSteps>>,
     mut groups: Local<Vec<usize>>,
     mut blocks: Local<Vec<usize>>,
+    mut workspaces: Local<WorkerWorkspaces>,
 ) {
     let steps = pass.map_or(1, |p| p.get());
     let (step0, t0_s) = (clock.step, clock.time_s);
@@ -115,28 +117,35 @@ pub fn step_robot_pass(
     let lanes = lanes_on(&config, batching.as_deref());
     let sims = &mut batch.sims;
     plan_groups(sims, lanes, &mut groups);
+    // each worker's workspace, lent to the worker for a block (or a robot)
+    workspaces.fit(pool.threads());
+    let workspaces = &*workspaces;
     match layout.as_deref().copied().unwrap_or_default() {
         StageLayout::RobotBlocks { robots } => {
             plan_blocks(&groups, robots, &mut blocks);
             pool.for_each_group(sims, &blocks, |block| {
-                for j in 0..steps {
-                    let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
-                    for sim in block.iter_mut().filter(|s| live(s)) {
-                        sense_robot(sim, t_s);
+                workspaces.with(|ws| {
+                    for j in 0..steps {
+                        let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
+                        for sim in block.iter_mut().filter(|s| live(s)) {
+                            sense_robot(sim, ws, t_s);
+                        }
+                        for sim in block.iter_mut().filter(|s| live(s)) {
+                            control_stage(sim, ws, t_s, tick, control_dt_s);
+                        }
+                        for sim in block.iter_mut().filter(|s| live(s)) {
+                            observe_robot(sim, t_s);
+                        }
+                        for_each_lane_group(block, lanes, |group| {
+                            step_group(group, ws, dt_s, integrator)
+                        });
+                        let (t_after_s, _) = step_time(step0, t0_s, j + 1, dt_s, &rate);
+                        for sim in block.iter_mut().filter(|s| live(s)) {
+                            record_robot(sim, dt_s, saturate);
+                            check_divergence(sim, t_after_s);
+                        }
                     }
-                    for sim in block.iter_mut().filter(|s| live(s)) {
-                        control_stage(sim, t_s, tick, control_dt_s);
-                    }
-                    for sim in block.iter_mut().filter(|s| live(s)) {
-                        observe_robot(sim, t_s);
-                    }
-                    for_each_lane_group(block, lanes, |group| step_group(group, dt_s, integrator));
-                    let (t_after_s, _) = step_time(step0, t0_s, j + 1, dt_s, &rate);
-                    for sim in block.iter_mut().filter(|s| live(s)) {
-                        record_robot(sim, dt_s, saturate);
-                        check_divergence(sim, t_after_s);
-                    }
-                }
+                })
             });
         }
         StageLayout::StageMajor => {
@@ -144,12 +153,12 @@ pub fn step_robot_pass(
                 let (t_s, tick) = step_time(step0, t0_s, j, dt_s, &rate);
                 pool.for_each(sims, |sim| {
                     if live(sim) {
-                        sense_robot(sim, t_s)
+                        workspaces.with(|ws| sense_robot(sim, ws, t_s))
                     }
                 });
                 pool.for_each(sims, |sim| {
                     if live(sim) {
-                        control_stage(sim, t_s, tick, control_dt_s)
+                        workspaces.with(|ws| control_stage(sim, ws, t_s, tick, control_dt_s))
                     }
                 });
                 pool.for_each(sims, |sim| {
@@ -157,7 +166,9 @@ pub fn step_robot_pass(
                         observe_robot(sim, t_s)
                     }
                 });
-                pool.for_each_group(sims, &groups, |group| step_group(group, dt_s, integrator));
+                pool.for_each_group(sims, &groups, |group| {
+                    workspaces.with(|ws| step_group(group, ws, dt_s, integrator))
+                });
                 let (t_after_s, _) = step_time(step0, t0_s, j + 1, dt_s, &rate);
                 pool.for_each(sims, |sim| {
                     if live(sim) {

@@ -12,12 +12,13 @@ use bevy_ecs::prelude::*;
 use quadsim_components::{
     ControlRate, Controller, RobotBatch, RobotSensing, RobotSim, SimClock, SimConfig, SimThreadPool,
 };
-use quadsim_engine::Data;
 use quadsim_engine::contact::evaluate;
 use quadsim_engine::control::prescribed::PrescribedMode;
 use quadsim_engine::control::walker::WalkerInput;
 use quadsim_engine::dispatch::forward_kinematics;
 use quadsim_engine::integrate::State;
+
+use crate::workspace::{WorkerWorkspace, WorkerWorkspaces};
 
 /// Runs every robot's controller on controller ticks: the `Control` stage
 /// over the whole herd as a system of its own (the step schedule runs it
@@ -28,22 +29,33 @@ pub fn run_controllers(
     clock: Res<SimClock>,
     rate: Res<ControlRate>,
     config: Res<SimConfig>,
+    mut workspaces: Local<WorkerWorkspaces>,
 ) {
     let tick = is_control_tick(clock.step, &rate);
     let sims = &mut batch.sims;
     let dt = clock_dt(&rate, &config);
     let t = clock.time_s;
-    pool.for_each(sims, |sim| control_stage(sim, t, tick, dt));
+    workspaces.fit(pool.threads());
+    let workspaces = &*workspaces;
+    pool.for_each(sims, |sim| {
+        workspaces.with(|ws| control_stage(sim, ws, t, tick, dt))
+    });
 }
 
 /// One robot's `Control` stage at time `t_s`: the prescribed controller
 /// every step, the others on controller ticks (`tick`), each ticking every
-/// `control_dt_s`.
-pub fn control_stage(sim: &mut RobotSim, t_s: f64, tick: bool, control_dt_s: f64) {
+/// `control_dt_s`; `ws` is the calling worker's workspace.
+pub fn control_stage(
+    sim: &mut RobotSim,
+    ws: &mut WorkerWorkspace,
+    t_s: f64,
+    tick: bool,
+    control_dt_s: f64,
+) {
     if matches!(sim.run.controller, Controller::Prescribed(_)) {
         prescribe(sim, t_s, tick);
     } else if tick {
-        control_robot_at(sim, t_s, control_dt_s);
+        control_robot_at(sim, ws, t_s, control_dt_s);
     }
 }
 
@@ -112,8 +124,10 @@ pub(crate) fn clock_dt(rate: &ControlRate, config: &SimConfig) -> f64 {
     rate.every_steps.max(1) as f64 * config.dt_s
 }
 
-/// One robot's control law at time `t_s`, ticking every `dt_s`.
-pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
+/// One robot's control law at time `t_s`, ticking every `dt_s`; a walker
+/// on the estimated state computes its kinematics in the worker's spare
+/// `Data` (`ws`).
+pub fn control_robot_at(sim: &mut RobotSim, ws: &mut WorkerWorkspace, t_s: f64, dt_s: f64) {
     if let Controller::Walker(w) = &mut sim.run.controller {
         while let Some(&(tc, cmd)) = sim.run.commands.first() {
             if tc > t_s + 1e-12 {
@@ -189,7 +203,7 @@ pub fn control_robot_at(sim: &mut RobotSim, t_s: f64, dt_s: f64) {
             // The kinematics at the estimated state go to a spare workspace:
             // the robot's `data` keeps the true state's, which the `Contact`
             // stage would otherwise compute again (same results either way).
-            Data::with_spare(model, |spare| {
+            ws.spare_data.with(model, |spare| {
                 w.tick(model, spare, q, v, &input, tau_joints)
             });
         } else if on_estimate {

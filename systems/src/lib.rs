@@ -24,6 +24,7 @@ mod schedule;
 mod sense;
 mod simulation;
 mod step;
+mod workspace;
 
 pub use blocks::{PassSteps, plan_blocks, step_robot_pass};
 pub use compile::{
@@ -49,3 +50,4 @@ pub use schedule::{
 pub use sense::{sense_robot, sense_robots};
 pub use simulation::{MAX_PASS_STEPS, Simulation};
 pub use step::{advance_clock, plan_groups, step_robot, step_robots};
+pub use workspace::{WorkerWorkspace, WorkerWorkspaces};

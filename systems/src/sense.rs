@@ -15,16 +15,28 @@ use quadsim_engine::kinematics::base_quat;
 use quadsim_engine::sensors::{SensorTruth, SensorUpdates};
 use quadsim_engine::terrain::Terrain as _;
 
+use crate::workspace::{WorkerWorkspace, WorkerWorkspaces};
+
 /// Samples every robot's sensors and runs its estimator, in parallel: the
 /// `Sense` stage over the whole herd as a system of its own (the step
 /// schedule runs it inside [`step_robot_pass`](crate::step_robot_pass)).
-pub fn sense_robots(mut batch: ResMut<RobotBatch>, pool: Res<SimThreadPool>, clock: Res<SimClock>) {
+pub fn sense_robots(
+    mut batch: ResMut<RobotBatch>,
+    pool: Res<SimThreadPool>,
+    clock: Res<SimClock>,
+    mut workspaces: Local<WorkerWorkspaces>,
+) {
     let t = clock.time_s;
-    pool.for_each(&mut batch.sims, |sim| sense_robot(sim, t));
+    workspaces.fit(pool.threads());
+    let workspaces = &*workspaces;
+    pool.for_each(&mut batch.sims, |sim| {
+        workspaces.with(|ws| sense_robot(sim, ws, t))
+    });
 }
 
-/// One robot's sensors and estimator at time `t_s` (the step's start state).
-pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
+/// One robot's sensors and estimator at time `t_s` (the step's start state);
+/// `ws` is the calling worker's workspace.
+pub fn sense_robot(sim: &mut RobotSim, ws: &mut WorkerWorkspace, t_s: f64) {
     let RobotSim {
         model,
         data,
@@ -133,6 +145,7 @@ pub fn sense_robot(sim: &mut RobotSim, t_s: f64) {
                 contacts: &s.contacts,
                 terrain: &contact.terrain,
             },
+            &mut ws.spare_kinematics,
         );
         let ground = contact
             .terrain

@@ -1,6 +1,5 @@
 //! Time integration of every robot, in parallel, and the clock.
 
-use std::cell::RefCell;
 use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
@@ -8,8 +7,10 @@ use quadsim_components::{
     ContactForces, Controller, LaneBatching, RobotBatch, RobotSim, SimClock, SimConfig,
     SimThreadPool,
 };
-use quadsim_engine::batch::{BatchData, LANES, StepParts, step_semi_implicit_batch};
+use quadsim_engine::batch::{LANES, StepParts, step_semi_implicit_batch};
 use quadsim_engine::integrate::{self, Integrator};
+
+use crate::workspace::{WorkerWorkspace, WorkerWorkspaces};
 
 /// Advances every compiled robot by one `dt` on the world's thread pool: the
 /// integration over the whole herd as a system of its own (the step
@@ -20,8 +21,9 @@ use quadsim_engine::integrate::{self, Integrator};
 /// their dynamics in SIMD lanes ([`step_semi_implicit_batch`]); robots the
 /// batch cannot take (RK4, an imposed joint motion, a group of one) are
 /// stepped alone with [`step_robot`]. Each group is stepped start to finish
-/// by one worker with its own data and workspaces: no lock, no allocation
-/// after the first steps. The batched step is bit-identical to the scalar
+/// by one worker with its own data and its worker's workspace (the system's
+/// [`WorkerWorkspaces`]): no contended lock, no allocation after the first
+/// steps. The batched step is bit-identical to the scalar
 /// one, so the result depends neither on the grouping nor on the number of
 /// threads.
 pub fn step_robots(
@@ -30,12 +32,17 @@ pub fn step_robots(
     config: Res<SimConfig>,
     batching: Option<Res<LaneBatching>>,
     mut ends: Local<Vec<usize>>,
+    mut workspaces: Local<WorkerWorkspaces>,
 ) {
     let (dt_s, integrator) = (config.dt_s, config.integrator);
     let lanes = lanes_on(&config, batching.as_deref());
     let sims = &mut batch.sims;
     plan_groups(sims, lanes, &mut ends);
-    pool.for_each_group(sims, &ends, |group| step_group(group, dt_s, integrator));
+    workspaces.fit(pool.threads());
+    let workspaces = &*workspaces;
+    pool.for_each_group(sims, &ends, |group| {
+        workspaces.with(|ws| step_group(group, ws, dt_s, integrator))
+    });
 }
 
 /// Which robots go into SIMD lanes across robots: with semi-implicit Euler,
@@ -50,10 +57,15 @@ pub(crate) fn lanes_on(config: &SimConfig, batching: Option<&LaneBatching>) -> L
 
 /// Steps one group of [`plan_groups`]: in lanes when it has several robots
 /// (robot by robot, the same bits, once one of them has diverged); a robot
-/// that has diverged is not stepped.
-pub(crate) fn step_group(group: &mut [RobotSim], dt_s: f64, integrator: Integrator) {
+/// that has diverged is not stepped. `ws`: the calling worker's workspace.
+pub(crate) fn step_group(
+    group: &mut [RobotSim],
+    ws: &mut WorkerWorkspace,
+    dt_s: f64,
+    integrator: Integrator,
+) {
     if group.len() > 1 && group.iter().all(live) {
-        step_in_lanes(group, dt_s);
+        step_in_lanes(group, ws, dt_s);
     } else {
         for sim in group.iter_mut().filter(|s| live(s)) {
             step_robot(sim, dt_s, integrator);
@@ -118,13 +130,6 @@ pub(crate) fn for_each_lane_group(
     }
 }
 
-thread_local! {
-    /// Each worker's lane workspaces, one per model size met (sizes are all a
-    /// [`BatchData`] depends on), kept between steps so nothing is allocated
-    /// once every size has been seen.
-    static LANE_WORKSPACES: RefCell<Vec<BatchData<LANES>>> = const { RefCell::new(Vec::new()) };
-}
-
 /// One robot's buffers for the batched step.
 fn step_parts(sim: &mut RobotSim) -> StepParts<'_, ContactForces> {
     StepParts {
@@ -138,25 +143,13 @@ fn step_parts(sim: &mut RobotSim) -> StepParts<'_, ContactForces> {
 
 /// Steps 2..=[`LANES`] lane-ready robots of one model with semi-implicit Euler,
 /// their dynamics in SIMD lanes; each ends exactly as [`step_robot`] leaves it.
-fn step_in_lanes(group: &mut [RobotSim], dt_s: f64) {
+/// The lanes' workspace is the worker's (`ws`), one per model size.
+fn step_in_lanes(group: &mut [RobotSim], ws: &mut WorkerWorkspace, dt_s: f64) {
     for sim in group.iter_mut() {
         set_servo_targets(sim);
     }
     let model = Arc::clone(&group[0].model);
-    LANE_WORKSPACES.with(|cell| {
-        let mut spaces = cell.borrow_mut();
-        let fits = |bd: &BatchData<LANES>| {
-            bd.q.len() == model.nq && bd.v.len() == model.nv && bd.pose.len() == model.nbodies
-        };
-        let k = match spaces.iter().position(fits) {
-            Some(k) => k,
-            None => {
-                spaces.push(BatchData::new(&model));
-                spaces.len() - 1
-            }
-        };
-        step_semi_implicit_batch(&model, &mut spaces[k], group, step_parts, dt_s);
-    });
+    step_semi_implicit_batch(&model, ws.lanes_for(&model), group, step_parts, dt_s);
     let worker = rayon::current_thread_index();
     for sim in group {
         sim.last_worker = worker;

@@ -51,7 +51,6 @@ use crate::data::Data;
 use crate::description::RobotDescription;
 use crate::integrate::ImposedJoints;
 use crate::legs::ik::IkOptions;
-use crate::legs::study_b_dynamics::{StudyBLegDynamics, StudyBTorqueComparison};
 use crate::legs::{FootPoint, LegError, LegKinematics};
 use crate::model::Model;
 use glam::DVec3;
@@ -444,32 +443,6 @@ impl Prescribed {
                 + self.params.pd_kd_nms_per_rad[j] * (self.qd_ref[j] - qd_j[j]);
             let lim = model.effort_limit[nv0 + j];
             tau_joints[j] = t.clamp(-lim, lim);
-        }
-    }
-
-    /// Adds one sample of Study B's Table 4 comparison: for every 3-DOF leg,
-    /// Study B's fixed-base Lagrangian leg model ([`StudyBLegDynamics::STUDY`],
-    /// no ground force) on the last update's reference against the simulated
-    /// joint torques `tau_joints` (N·m, joints only) at that instant.
-    pub fn sample_study_b(
-        &self,
-        model: &Model,
-        tau_joints: &[f64],
-        out: &mut StudyBTorqueComparison,
-    ) {
-        let nv0 = model.base_nv();
-        for leg in &self.legs {
-            let vi = leg.v_indices();
-            if vi.len() != 3 {
-                continue;
-            }
-            let j = [vi[0] - nv0, vi[1] - nv0, vi[2] - nv0];
-            let m = StudyBLegDynamics::STUDY.torques(
-                j.map(|k| self.q_ref[k]),
-                j.map(|k| self.qd_ref[k]),
-                j.map(|k| self.qdd_ref[k]),
-            );
-            out.add(m, j.map(|k| tau_joints[k]));
         }
     }
 }

@@ -19,7 +19,7 @@ pub mod kf;
 use glam::{DMat3, DQuat, DVec3};
 
 use crate::contact::ContactPoint;
-use crate::data::Data;
+use crate::data::{Data, SpareData};
 use crate::dispatch::{forward_kinematics, forward_kinematics_unrecorded, leg_end_points};
 use crate::kinematics::base_quat;
 use crate::model::Model;
@@ -193,8 +193,10 @@ impl BaseEstimator {
         }
     }
 
-    /// One estimator update (call on every new IMU sample).
-    pub fn update(&mut self, model: &Model, input: &EstimatorInput<'_>) {
+    /// One estimator update (call on every new IMU sample). A robot whose
+    /// legs do not run in lanes computes its leg kinematics in a
+    /// kinematics-only spare of `spares` ([`SpareData::kinematics_only`]).
+    pub fn update(&mut self, model: &Model, input: &EstimatorInput<'_>, spares: &mut SpareData) {
         let dt = input.dt_s.max(0.0);
         // 1. attitude, with the base's acceleration of the last update
         //    (from the position filter: leg odometry pins its velocity)
@@ -238,8 +240,8 @@ impl BaseEstimator {
                 *e = (r[k], rd[k]);
             }
         } else {
-            // on this thread's kinematics-only spare: nothing reads it later
-            Data::with_kinematics_spare(model, |data| {
+            // on a kinematics-only spare: nothing reads it later
+            spares.with(model, |data| {
                 forward_kinematics_unrecorded(model, data, &self.q_fk, &self.v_fk);
                 for (e, foot) in ends.iter_mut().zip(&self.feet) {
                     *e = (

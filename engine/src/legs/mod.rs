@@ -49,8 +49,6 @@ pub mod ik;
 pub mod quad12_leg;
 pub mod quad16_leg;
 pub mod serial_leg;
-pub mod study_b;
-pub mod study_b_dynamics;
 
 pub use ik::{AnkleMode, IkClamped, IkError, IkOptions, KneeBranch, wrap_angle};
 pub use quad12_leg::Quad12Leg;

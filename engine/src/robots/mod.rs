@@ -38,9 +38,11 @@ pub mod quad16;
 pub use params::{Domain, ParamError, ParamSpec};
 
 use crate::Data;
+use crate::actuator_model::ActuatorDefaults;
 use crate::description::{RobotDescription, Shape};
 use crate::kinematics::{forward_kinematics_pos, frame_pose};
 use crate::model::{BaseKind, Model, ModelError};
+use crate::sensors::SensorSpec;
 use glam::DVec3;
 use params::Values;
 
@@ -101,6 +103,60 @@ pub fn nominal_stance(name: &str) -> Option<Vec<f64>> {
         quad16::NAME => Some(quad16::STANCE_LEG_RAD.repeat(4)),
         quad12::NAME => Some(quad12::STANCE_LEG_RAD.repeat(4)),
         _ => None,
+    }
+}
+
+/// The source study a built-in robot is the robot of
+/// (`/work/shared/reference.md`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SourceStudy {
+    /// Study A: the mammal-like quadruped under virtual model control
+    /// ([`quad16`]).
+    A,
+    /// Study B: the small D-H trotter on hobby servos ([`quad12`]).
+    B,
+}
+
+/// The study a built-in robot comes from, `None` for an unknown name.
+pub fn source_study(name: &str) -> Option<SourceStudy> {
+    match name {
+        quad16::NAME => Some(SourceStudy::A),
+        quad12::NAME => Some(SourceStudy::B),
+        _ => None,
+    }
+}
+
+/// The default actuators a built-in robot states ([`quad16::ACTUATORS`],
+/// [`quad12::ACTUATORS`]), `None` for an unknown name: a robot without them
+/// gets ideal sources by default, and motors whose stall torque and no-load
+/// speed are its joints' limits
+/// ([`crate::actuator_model::ActuatorSpec::from_limits`]).
+pub fn actuator_defaults(name: &str) -> Option<ActuatorDefaults> {
+    match name {
+        quad16::NAME => Some(quad16::ACTUATORS),
+        quad12::NAME => Some(quad12::ACTUATORS),
+        _ => None,
+    }
+}
+
+/// The default sensors of a robot called `name` of `total_mass_kg`: a
+/// built-in robot's own ([`quad16::SENSORS`], [`quad12::SENSORS`]); any
+/// other robot gets quad16's with its foot force sensors sized to the robot:
+/// thresholds and noise times `total_mass_kg /`
+/// [`quad16::SENSOR_REFERENCE_MASS_KG`] (quad16's 28 kg; unscaled for a
+/// mass that is not finite and positive). quad16's 20 N threshold is 29 % of
+/// its standing load per foot; an 8.9 kg robot stands on 22 N per foot, so
+/// at 20 N its feet flicker in and out of contact while standing and read
+/// as off the ground in two-foot support's unloading (its trot fell within
+/// 0.21 s on the sensed state; docs/walking.md, "Any quadruped").
+pub fn default_sensors(name: &str, total_mass_kg: f64) -> SensorSpec {
+    match name {
+        quad16::NAME => quad16::SENSORS,
+        quad12::NAME => quad12::SENSORS,
+        _ if total_mass_kg.is_finite() && total_mass_kg > 0.0 => {
+            quad16::SENSORS.with_contacts_scaled(total_mass_kg / quad16::SENSOR_REFERENCE_MASS_KG)
+        }
+        _ => quad16::SENSORS,
     }
 }
 

@@ -84,7 +84,9 @@
 
 use super::links::box_torso;
 use super::params::{Domain, ParamSpec, Values};
+use crate::actuator_model::{ActuatorDefaults, ActuatorKind, MotorGear, MotorRating, ServoParams};
 use crate::description::{Geometry, JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
+use crate::sensors::{ONE_G_MPS2, SensorSpec};
 use crate::spatial::{Transform, rot_from_rpy};
 use glam::{DMat3, DVec3};
 
@@ -112,6 +114,66 @@ pub const STANCE_LEG_RAD: [f64; 3] = [
     std::f64::consts::FRAC_PI_6,
     std::f64::consts::FRAC_PI_3,
 ];
+
+/// Degrees to radians.
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+/// quad12's sensors (`docs/sensors.md`), as on Study B's 12 kg hobby-servo
+/// robot: an InvenSense MPU-6050-class IMU (±8 g, ±500 °/s, 16 bit;
+/// 400 µg/√Hz, 0.005 °/s/√Hz), 10-bit servo potentiometers over 300°
+/// (5.1 mrad) with velocity by differencing (10 ms filter), foot switches at
+/// 8/4 N.
+pub const SENSORS: SensorSpec = SensorSpec {
+    accel_noise_density: 400e-6 * ONE_G_MPS2,
+    gyro_noise_density: 0.005 * DEG,
+    accel_range_mps2: 8.0 * ONE_G_MPS2,
+    gyro_range_radps: 500.0 * DEG,
+    encoder_resolution_rad: 300.0 * DEG / 1024.0,
+    encoder_noise_std_rad: 2e-3,
+    encoder_velocity_filter_s: 0.01,
+    contact_on_threshold_n: 8.0,
+    contact_off_threshold_n: 4.0,
+    contact_noise_std_n: 1.0,
+    contact_force_output: false,
+};
+
+/// Futaba S3003 stall torque (N·m): Study B's 300 N·mm at 6 V (the figure
+/// its knee is sized against; see `docs/actuators.md` for the datasheet's).
+pub const S3003_STALL_TORQUE_NM: f64 = 0.3;
+/// Futaba S3003 no-load speed at 6 V (rad/s): 0.19 s per 60° (datasheet;
+/// 0.23 s per 60° at 4.8 V).
+pub const S3003_NO_LOAD_SPEED_RADPS: f64 = std::f64::consts::FRAC_PI_3 / 0.19;
+
+/// quad12's actuators (`docs/actuators.md`): ideal sources by default
+/// (Study B imposes the joints' motion). DC motor: a hobby servo's motor and
+/// gear train, N = 250 with a 5·10⁻⁸ kg·m² rotor (reflected
+/// 3.1·10⁻³ kg·m²), 0.02 N·m Coulomb friction, 200 Hz bandwidth, no
+/// latency, stalling at the joint's effort limit and running free at its
+/// velocity limit / 0.75 (3 N·m, 8 rad/s unless the `actuator.*`
+/// parameters change the limits). Servo: Study B's Futaba S3003 at 6 V
+/// whatever the joint's limits: τ_s = 0.3 N·m, ω₀ = 60°/0.19 s =
+/// 5.51 rad/s, the same gear train, a 300 Hz PD of 1.72 N·m/rad (full
+/// torque at 10° of error) and 0.05 N·m·s/rad.
+pub const ACTUATORS: ActuatorDefaults = ActuatorDefaults {
+    kind: ActuatorKind::Ideal,
+    gear: MotorGear {
+        gear_ratio: 250.0,
+        rotor_inertia_kgm2: 5e-8,
+        viscous_nms_per_rad: 0.0,
+        coulomb_nm: 0.02,
+        bandwidth_hz: 200.0,
+        latency_ticks: 0,
+    },
+    servo_rating: Some(MotorRating {
+        stall_torque_nm: S3003_STALL_TORQUE_NM,
+        no_load_speed_radps: S3003_NO_LOAD_SPEED_RADPS,
+    }),
+    servo: ServoParams {
+        kp_nm_per_rad: S3003_STALL_TORQUE_NM / 10f64.to_radians(),
+        kd_nms_per_rad: 0.05,
+        rate_hz: 300.0,
+    },
+};
 
 /// Principal inertias about the CoM (kg·m², link axes) of the study's links at
 /// their default lengths: hip, thigh, shank.

@@ -58,7 +58,9 @@
 
 use super::links::{box_torso, solid_link};
 use super::params::{Domain, ParamSpec, Values};
+use crate::actuator_model::{ActuatorDefaults, ActuatorKind, MotorGear, ServoParams};
 use crate::description::{JointDesc, JointKind, LinkDesc, RobotDescription, Shape};
+use crate::sensors::{ONE_G_MPS2, SensorSpec};
 use crate::spatial::Transform;
 use glam::{DMat3, DVec3};
 
@@ -78,6 +80,59 @@ pub const LEGS: [(&str, f64, f64); 4] = [
 /// rad forward, the foot is level, so the foot lands 5 cm · sin 0.3 ≈ 15 mm
 /// behind the hip.
 pub const STANCE_LEG_RAD: [f64; 4] = [0.0, 0.3, -0.6, 0.3];
+
+/// Degrees to radians.
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+/// The mass (kg) [`SENSORS`]' foot sensors are chosen for: quad16's at its
+/// defaults. A robot that is not built in gets them times its mass over this
+/// (`robots::default_sensors`).
+pub const SENSOR_REFERENCE_MASS_KG: f64 = 28.0;
+
+/// quad16's sensors (`docs/sensors.md`), as on a 28 kg research quadruped: a
+/// Bosch BMI088-class IMU (±24 g, ±2000 °/s, 16 bit; noise densities
+/// 175 µg/√Hz and 0.014 °/s/√Hz), 14-bit absolute joint encoders with
+/// velocity by differencing (2 ms filter), foot force sensing with 20/10 N
+/// thresholds and 2 N noise.
+pub const SENSORS: SensorSpec = SensorSpec {
+    accel_noise_density: 175e-6 * ONE_G_MPS2,
+    gyro_noise_density: 0.014 * DEG,
+    accel_range_mps2: 24.0 * ONE_G_MPS2,
+    gyro_range_radps: 2000.0 * DEG,
+    encoder_resolution_rad: std::f64::consts::TAU / 16384.0,
+    encoder_noise_std_rad: 1e-4,
+    encoder_velocity_filter_s: 0.002,
+    contact_on_threshold_n: 20.0,
+    contact_off_threshold_n: 10.0,
+    contact_noise_std_n: 2.0,
+    contact_force_output: true,
+};
+
+/// quad16's actuators (`docs/actuators.md`): DC motors by default, N = 10
+/// with a 1·10⁻⁴ kg·m² rotor (reflected 0.01 kg·m²), 0.1 N·m·s/rad viscous
+/// and 0.5 N·m Coulomb friction, 100 Hz torque bandwidth, no latency; each
+/// stalls at its joint's effort limit and runs free at its velocity limit /
+/// 0.75 (100 N·m, 40 rad/s unless the `actuator.*` parameters change the
+/// limits). Servo: the same motor under a 1 kHz PD of 300 N·m/rad and
+/// 5 N·m·s/rad. quad16 walks at least as well on its motors as on ideal
+/// sources (`docs/actuators.md`, "Defaults").
+pub const ACTUATORS: ActuatorDefaults = ActuatorDefaults {
+    kind: ActuatorKind::DcMotor,
+    gear: MotorGear {
+        gear_ratio: 10.0,
+        rotor_inertia_kgm2: 1e-4,
+        viscous_nms_per_rad: 0.1,
+        coulomb_nm: 0.5,
+        bandwidth_hz: 100.0,
+        latency_ticks: 0,
+    },
+    servo_rating: None,
+    servo: ServoParams {
+        kp_nm_per_rad: 300.0,
+        kd_nms_per_rad: 5.0,
+        rate_hz: 1000.0,
+    },
+};
 
 /// The parameter table (see the module docs).
 #[expect(

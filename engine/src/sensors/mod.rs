@@ -28,7 +28,7 @@ pub use encoders::{EncoderParams, Encoders, JointVelocityMode};
 pub use imu::{Imu, ImuParams, ImuSample};
 pub use mocap::{Mocap, MocapParams, MocapSample};
 pub use noise::{NoiseChannel, NoiseParams};
-pub use suite::{SensorConfig, SensorSuite, SensorTruth, SensorUpdates};
+pub use suite::{ONE_G_MPS2, SensorConfig, SensorSpec, SensorSuite, SensorTruth, SensorUpdates};
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -1,4 +1,5 @@
-//! A robot's sensors together, and the default sets per robot model.
+//! A robot's sensors together, and a robot's default set from its sensor
+//! hardware ([`SensorSpec`]).
 
 use glam::{DMat3, DQuat, DVec3};
 
@@ -21,91 +22,95 @@ pub struct SensorConfig {
     pub mocap: Option<MocapParams>,
 }
 
-/// Standard gravity (m/s²), to write accelerometer figures given in g.
-const G: f64 = 9.806_65;
+/// Standard gravity, one g (m/s²), to write accelerometer figures given in g.
+pub const ONE_G_MPS2: f64 = 9.806_65;
 
-/// quad16's mass (kg): the reference of [`SensorConfig::defaults_for_robot`]'s
-/// scaling of the foot sensors.
-const QUAD16_MASS_KG: f64 = 28.0;
+/// A robot's sensor hardware: the datasheet figures its default
+/// [`SensorConfig`] is built from ([`SensorConfig::from_spec`]). A robot
+/// states its own: the built-ins in `robots::quad16::SENSORS` and
+/// `robots::quad12::SENSORS`, any other robot quad16's sized to its mass
+/// (`robots::default_sensors`). Figures and sources in `docs/sensors.md`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorSpec {
+    /// Accelerometer noise density ((m/s²)/√Hz), over a bandwidth of half
+    /// the sensor rate.
+    pub accel_noise_density: f64,
+    /// Gyroscope noise density ((rad/s)/√Hz).
+    pub gyro_noise_density: f64,
+    /// Accelerometer full scale (± m/s², over 16 bits).
+    pub accel_range_mps2: f64,
+    /// Gyroscope full scale (± rad/s, over 16 bits).
+    pub gyro_range_radps: f64,
+    /// Joint encoder quantum (rad).
+    pub encoder_resolution_rad: f64,
+    /// Joint encoder white noise (rad).
+    pub encoder_noise_std_rad: f64,
+    /// Time constant of the filter on the encoders' differenced velocity (s).
+    pub encoder_velocity_filter_s: f64,
+    /// Foot contact: force above which a foot is on the ground (N).
+    pub contact_on_threshold_n: f64,
+    /// Foot contact: force below which a foot is off the ground (N).
+    pub contact_off_threshold_n: f64,
+    /// Foot contact: white noise on the measured force (N).
+    pub contact_noise_std_n: f64,
+    /// Whether the foot sensors report the force (else contact only).
+    pub contact_force_output: bool,
+}
+
+impl SensorSpec {
+    /// The same sensors with the foot sensors' thresholds and noise times
+    /// `factor` (a robot's mass over the mass they were chosen for).
+    pub fn with_contacts_scaled(self, factor: f64) -> SensorSpec {
+        SensorSpec {
+            contact_on_threshold_n: self.contact_on_threshold_n * factor,
+            contact_off_threshold_n: self.contact_off_threshold_n * factor,
+            contact_noise_std_n: self.contact_noise_std_n * factor,
+            ..self
+        }
+    }
+}
 
 impl SensorConfig {
-    /// The default sensors of a built-in model (`"quad16"`, `"quad12"`;
-    /// anything else gets quad16's), every sensor at `rate_hz` (the
-    /// controller rate), mocap off. Figures and sources in `docs/sensors.md`:
-    ///
-    /// - quad16 (a 28 kg research quadruped): a Bosch BMI088-class IMU
-    ///   (±24 g, ±2000 °/s, 16 bit; noise densities 175 µg/√Hz and
-    ///   0.014 °/s/√Hz over a bandwidth of rate/2; residual biases after a
-    ///   start-up calibration), 14-bit absolute joint encoders with velocity
-    ///   by differencing (2 ms filter), foot force sensing with 20/10 N
-    ///   thresholds and 2 N noise.
-    /// - quad12 (Study B's 12 kg hobby-servo robot): an InvenSense
-    ///   MPU-6050-class IMU (±8 g, ±500 °/s, 16 bit; 400 µg/√Hz,
-    ///   0.005 °/s/√Hz), 10-bit servo potentiometers over 300° (5.1 mrad) with
-    ///   velocity by differencing (10 ms filter), foot switches at 8/4 N.
-    pub fn defaults_for(model: &str, rate_hz: f64) -> SensorConfig {
+    /// The sensors of `spec`, every sensor at `rate_hz` (the controller
+    /// rate), mocap off: an IMU with residual biases after a start-up
+    /// calibration and the white noise of its densities over a bandwidth of
+    /// `rate_hz / 2`, 16-bit quanta over its ranges; joint encoders with
+    /// velocity by differencing; foot contact sensors.
+    pub fn from_spec(spec: &SensorSpec, rate_hz: f64) -> SensorConfig {
         let bw = (rate_hz / 2.0).sqrt();
-        let deg = std::f64::consts::PI / 180.0;
-        let (acc_density, gyro_density, acc_range, gyro_range) = if model == "quad12" {
-            (400e-6 * G, 0.005 * deg, 8.0 * G, 500.0 * deg)
-        } else {
-            (175e-6 * G, 0.014 * deg, 24.0 * G, 2000.0 * deg)
-        };
+        let (acc_range, gyro_range) = (spec.accel_range_mps2, spec.gyro_range_radps);
         let imu = ImuParams {
             rate_hz,
             accel: NoiseParams {
-                white_std: acc_density * bw,
+                white_std: spec.accel_noise_density * bw,
                 bias_std: 0.02,
                 bias_walk_std_per_sqrt_s: 1e-3,
                 saturation: acc_range,
                 quantum: 2.0 * acc_range / 65536.0,
             },
             gyro: NoiseParams {
-                white_std: gyro_density * bw,
+                white_std: spec.gyro_noise_density * bw,
                 bias_std: 1e-3,
                 bias_walk_std_per_sqrt_s: 1e-4,
                 saturation: gyro_range,
                 quantum: 2.0 * gyro_range / 65536.0,
             },
         };
-        let (encoders, contacts) = if model == "quad12" {
-            (
-                EncoderParams {
-                    rate_hz,
-                    resolution_rad: 300.0 * deg / 1024.0,
-                    noise_std_rad: 2e-3,
-                    offset_std_rad: 0.0,
-                    velocity: JointVelocityMode::Differencing {
-                        filter_time_constant_s: 0.01,
-                    },
-                },
-                ContactSensorParams {
-                    rate_hz,
-                    on_threshold_n: 8.0,
-                    off_threshold_n: 4.0,
-                    noise: NoiseParams::white(1.0),
-                    force_output: false,
-                },
-            )
-        } else {
-            (
-                EncoderParams {
-                    rate_hz,
-                    resolution_rad: std::f64::consts::TAU / 16384.0,
-                    noise_std_rad: 1e-4,
-                    offset_std_rad: 0.0,
-                    velocity: JointVelocityMode::Differencing {
-                        filter_time_constant_s: 0.002,
-                    },
-                },
-                ContactSensorParams {
-                    rate_hz,
-                    on_threshold_n: 20.0,
-                    off_threshold_n: 10.0,
-                    noise: NoiseParams::white(2.0),
-                    force_output: true,
-                },
-            )
+        let encoders = EncoderParams {
+            rate_hz,
+            resolution_rad: spec.encoder_resolution_rad,
+            noise_std_rad: spec.encoder_noise_std_rad,
+            offset_std_rad: 0.0,
+            velocity: JointVelocityMode::Differencing {
+                filter_time_constant_s: spec.encoder_velocity_filter_s,
+            },
+        };
+        let contacts = ContactSensorParams {
+            rate_hz,
+            on_threshold_n: spec.contact_on_threshold_n,
+            off_threshold_n: spec.contact_off_threshold_n,
+            noise: NoiseParams::white(spec.contact_noise_std_n),
+            force_output: spec.contact_force_output,
         };
         SensorConfig {
             imu: Some(imu),
@@ -113,29 +118,6 @@ impl SensorConfig {
             contacts: Some(contacts),
             mocap: None,
         }
-    }
-
-    /// The default sensors of a robot of `total_mass_kg` called `model`: a
-    /// built-in robot's ([`Self::defaults_for`], unchanged); any other robot
-    /// gets quad16's set with its foot force sensors sized to the robot:
-    /// thresholds and noise times `total_mass_kg / 28` (quad16's 28 kg).
-    /// quad16's 20 N threshold is 29 % of its standing load per foot; an
-    /// 8.9 kg robot stands on 22 N per foot, so at 20 N its feet flicker in
-    /// and out of contact while standing and read as off the ground in
-    /// two-foot support's unloading (its trot fell within 0.21 s on the
-    /// sensed state; docs/walking.md, "Any quadruped").
-    pub fn defaults_for_robot(model: &str, total_mass_kg: f64, rate_hz: f64) -> SensorConfig {
-        let mut cfg = Self::defaults_for(model, rate_hz);
-        let builtin = crate::robots::builtin_names().contains(&model);
-        if !builtin && total_mass_kg.is_finite() && total_mass_kg > 0.0 {
-            let r = total_mass_kg / QUAD16_MASS_KG;
-            if let Some(c) = cfg.contacts.as_mut() {
-                c.on_threshold_n *= r;
-                c.off_threshold_n *= r;
-                c.noise.white_std *= r;
-            }
-        }
-        cfg
     }
 
     /// Mocap's defaults when switched on: 120 Hz, 10 ms latency, 0.5 mm and

@@ -21,6 +21,8 @@
 //! leg to 1e-9 N·m.
 
 use glam::{DMat3, DVec3};
+use quadsim_engine::Model;
+use quadsim_engine::control::prescribed::Prescribed;
 
 /// One rigid link: mass, CoM and principal inertia about the CoM, in the
 /// link's frame.
@@ -270,6 +272,33 @@ impl StudyBTorqueComparison {
         self.model_knee.add(model_nm[2]);
         self.sim_hip.add(sim_nm[1]);
         self.sim_knee.add(sim_nm[2]);
+    }
+
+    /// Adds one sample of the comparison at the prescribed controller's last
+    /// reference: for every 3-DOF leg of `controller`, Study B's fixed-base
+    /// Lagrangian leg model ([`StudyBLegDynamics::STUDY`], no ground force)
+    /// on the reference against the simulated joint torques `tau_joints`
+    /// (N·m, joints only) at that instant.
+    pub fn sample(&mut self, controller: &Prescribed, model: &Model, tau_joints: &[f64]) {
+        let nv0 = model.base_nv();
+        let (q_ref, qd_ref, qdd_ref) = (
+            controller.q_ref(),
+            controller.qd_ref(),
+            controller.qdd_ref(),
+        );
+        for leg in controller.legs() {
+            let vi = leg.v_indices();
+            if vi.len() != 3 {
+                continue;
+            }
+            let j = [vi[0] - nv0, vi[1] - nv0, vi[2] - nv0];
+            let m = StudyBLegDynamics::STUDY.torques(
+                j.map(|k| q_ref[k]),
+                j.map(|k| qd_ref[k]),
+                j.map(|k| qdd_ref[k]),
+            );
+            self.add(m, j.map(|k| tau_joints[k]));
+        }
     }
 
     /// Simulated peak over model peak: (hip, knee).

@@ -7,10 +7,10 @@
 //! (thigh), θ3 (knee); link lengths l1 (across the leg), l2 (thigh), l3
 //! (shank); mount offsets a, b, c; foot position `p` in the body frame.
 //! The study's frame has no mount yaw (quad12's built-in turns each leg
-//! outward: see [`super::Quad12Leg`]).
+//! outward: see [`quadsim_engine::legs::Quad12Leg`]).
 
-use super::ik::{IkError, KneeBranch};
 use glam::DVec3;
+use quadsim_engine::legs::{IkError, KneeBranch, wrap_angle};
 
 /// Study B's leg: mount offsets and link lengths (m).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -121,12 +121,13 @@ impl StudyBLeg {
                 max_reach_m: l2 + l3,
             });
         }
-        let t3 = knee.sign(1.0) * c3.clamp(-1.0, 1.0).acos();
+        // the nominal branch bends the knee positively (quad12's stance)
+        let sign = match knee {
+            KneeBranch::Nominal | KneeBranch::Positive => 1.0,
+            KneeBranch::Negative => -1.0,
+        };
+        let t3 = sign * c3.clamp(-1.0, 1.0).acos();
         let t2 = (-a).atan2(r) - (l3 * t3.sin()).atan2(l2 + l3 * t3.cos());
-        Ok([
-            super::wrap_angle(t1),
-            super::wrap_angle(t2),
-            super::wrap_angle(t3),
-        ])
+        Ok([wrap_angle(t1), wrap_angle(t2), wrap_angle(t3)])
     }
 }
