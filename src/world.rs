@@ -862,7 +862,8 @@ fn controller(
             }))
         }
         "vmc" => {
-            let mut wp = WalkerParams::default_for(desc, model);
+            let profile = RobotProfile::from_model(desc, model);
+            let mut wp = WalkerParams::from_profile(&profile, model);
             let has = |k: &str| c.params.contains_key(k);
             // the whole-body layer, with its trot, unless the scenario asks
             // for Study A's τ = Jᵀ f mapping
@@ -875,7 +876,7 @@ fn controller(
                 wp.gait = Gait::long_swing_trot();
                 // room to step sideways after a push, where the robot's
                 // profile gives it (quad16: 0.2 m, robots::builtin_tuning)
-                if let Some(y) = RobotProfile::from_model(desc, model).whole_body_max_step_y_m {
+                if let Some(y) = profile.whole_body_max_step_y_m {
                     wp.placement.max_step_y_m = y;
                 }
             }
@@ -914,14 +915,14 @@ fn controller(
                 })?;
                 // the whole-body walker walks with a shorter stride than the
                 // walk's default timing (Gait::whole_body_walk says why)
-                let base = if wp.whole_body && kind == GaitKind::Walk {
-                    Gait::whole_body_walk()
+                let (period, duty) = if wp.whole_body && kind == GaitKind::Walk {
+                    let walk = Gait::whole_body_walk();
+                    (walk.period_s(), walk.duty_factor())
                 } else {
-                    Gait::of_kind(kind, kind.default_period_s(), kind.default_duty())
-                        .map_err(|e| loc.at(&kp, e.to_string()))?
+                    (kind.default_period_s(), kind.default_duty())
                 };
-                let period = get("period_s", base.period_s());
-                let duty = get("duty_factor", base.duty_factor());
+                let period = get("period_s", period);
+                let duty = get("duty_factor", duty);
                 wp.gait =
                     Gait::of_kind(kind, period, duty).map_err(|e| loc.at(&kp, e.to_string()))?;
             }
